@@ -1,0 +1,1 @@
+//! rigtwin-arm (under construction in its issue).

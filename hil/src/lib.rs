@@ -1,0 +1,1 @@
+//! rigtwin — the runtime and command line.

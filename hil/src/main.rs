@@ -1,0 +1,4 @@
+//! The `rigtwin` command.
+fn main() {
+    println!("rigtwin {}", env!("CARGO_PKG_VERSION"));
+}

@@ -1,0 +1,1 @@
+//! End-to-end tests of rigtwin live in `tests/tests/`; shared helpers live here.

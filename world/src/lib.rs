@@ -1,0 +1,1 @@
+//! rigtwin-world (under construction in its issue).
