@@ -8,7 +8,9 @@
 //! the rig frame (origin at the workspace centre, `x` to the subject's right, `y` away
 //! from the subject, horizontal plane).
 
+pub mod estimate;
 pub mod io;
+pub mod signal;
 pub mod time;
 
 pub use io::{ErrorKind, MotorCommand, RigIo, RigIoError, SensorFrame};

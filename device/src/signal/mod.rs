@@ -1,0 +1,1 @@
+//! Signal processing for the estimators, checked against scipy on golden vectors.
