@@ -6,6 +6,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::ArmError;
+use crate::muscles::{MuscleModel, MuscleParams};
+use crate::noise::NoiseParams;
 
 /// One rigid link of the planar arm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -80,14 +82,87 @@ impl Segment {
     }
 }
 
-/// The whole arm.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Delayed PD feedback on the muscle-level tracking error (000_* section 4):
+/// `a_FB(t) = G_p e(t − δ) + G_d ė(t − δ)` [N] for each muscle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
+pub struct FeedbackParams {
+    /// Delay δ [ms]; must be a whole number of neural ticks. Default 60 ms (000_* δ_s).
+    pub delay_ms: f64,
+    /// Position gain G_p [N of activation per m of stretch]. Default 500 N/m (chosen:
+    /// adds about a third of the intrinsic joint stiffness, stable with the 60 ms delay).
+    pub position_gain_n_per_m: f64,
+    /// Velocity gain G_d [N s/m]. Default 25 N s/m (chosen, same ratio 1/20 s).
+    pub velocity_gain_n_s_per_m: f64,
+}
+
+impl Default for FeedbackParams {
+    fn default() -> Self {
+        FeedbackParams {
+            delay_ms: 60.0,
+            position_gain_n_per_m: 500.0,
+            velocity_gain_n_s_per_m: 25.0,
+        }
+    }
+}
+
+/// Extension (off by default): short-latency stretch reflex. Each muscle adds the
+/// activation `gain · ė(t − delay)` [N], with ė its stretch velocity relative to the plan.
+/// Linear (not rectified) so it appears in estimates as a delayed damping.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StretchReflex {
+    /// Reflex delay [ms], 10–40 ms in humans (000_* section 2); whole neural ticks.
+    pub delay_ms: f64,
+    /// Gain [N of activation per m/s of stretch velocity].
+    pub gain_n_s_per_m: f64,
+}
+
+impl StretchReflex {
+    /// A typical short-latency reflex: 25 ms, 50 N s/m.
+    pub const TYPICAL: StretchReflex = StretchReflex {
+        delay_ms: 25.0,
+        gain_n_s_per_m: 50.0,
+    };
+}
+
+/// Extension (off by default): muscle stiffness that changes over a session. In trial
+/// `n` (0-based, from [`crate::human::HumanConfig::trial_index`]) every muscle stiffness
+/// `K_m` (and so its damping) is multiplied by `scale_per_trial^n`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StiffnessDrift {
+    /// Factor per trial [-], e.g. 1.01 for +1 % per trial.
+    pub scale_per_trial: f64,
+}
+
+impl StiffnessDrift {
+    /// The stiffness scale in trial `trial_index`.
+    pub fn scale(&self, trial_index: u32) -> f64 {
+        self.scale_per_trial.powf(f64::from(trial_index))
+    }
+}
+
+/// The whole arm. Sections missing from a config take their defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct ArmParams {
     /// Shoulder to elbow.
     pub upper: Segment,
     /// Elbow to hand (forearm plus hand).
     pub fore: Segment,
+    /// The six muscles.
+    pub muscles: MuscleParams,
+    /// Delayed muscle-level PD feedback.
+    pub feedback: FeedbackParams,
+    /// Signal-dependent motor noise.
+    pub noise: NoiseParams,
+    /// Extension, off (absent) by default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stretch_reflex: Option<StretchReflex>,
+    /// Extension, off (absent) by default.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_drift: Option<StiffnessDrift>,
 }
 
 impl Default for ArmParams {
@@ -95,6 +170,11 @@ impl Default for ArmParams {
         ArmParams {
             upper: Segment::SHADMEHR_UPPER,
             fore: Segment::SHADMEHR_FORE,
+            muscles: MuscleParams::default(),
+            feedback: FeedbackParams::default(),
+            noise: NoiseParams::default(),
+            stretch_reflex: None,
+            stiffness_drift: None,
         }
     }
 }
@@ -109,10 +189,49 @@ impl ArmParams {
         Ok(arm)
     }
 
+    /// The stiffness-drift scale in a trial (1 when the extension is off).
+    pub fn stiffness_scale(&self, trial_index: u32) -> f64 {
+        self.stiffness_drift.map_or(1.0, |d| d.scale(trial_index))
+    }
+
     /// Checks every parameter; a bad one is named by its key.
     pub fn validate(&self) -> Result<(), ArmError> {
         self.upper.validate("upper")?;
         self.fore.validate("fore")?;
+        MuscleModel::new(&self.muscles)?;
+        let nonneg = |key: &'static str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(ArmError::InvalidParameter {
+                    key,
+                    reason: format!("must be finite and >= 0, got {v}"),
+                })
+            }
+        };
+        nonneg("feedback.delay_ms", self.feedback.delay_ms)?;
+        nonneg(
+            "feedback.position_gain_n_per_m",
+            self.feedback.position_gain_n_per_m,
+        )?;
+        nonneg(
+            "feedback.velocity_gain_n_s_per_m",
+            self.feedback.velocity_gain_n_s_per_m,
+        )?;
+        nonneg("noise.activation_cv", self.noise.activation_cv)?;
+        nonneg("noise.time_constant_ms", self.noise.time_constant_ms)?;
+        if let Some(r) = &self.stretch_reflex {
+            nonneg("stretch_reflex.delay_ms", r.delay_ms)?;
+            nonneg("stretch_reflex.gain_n_s_per_m", r.gain_n_s_per_m)?;
+        }
+        if let Some(d) = &self.stiffness_drift
+            && !(d.scale_per_trial.is_finite() && d.scale_per_trial > 0.0)
+        {
+            return Err(ArmError::InvalidParameter {
+                key: "stiffness_drift.scale_per_trial",
+                reason: format!("must be finite and > 0, got {}", d.scale_per_trial),
+            });
+        }
         Ok(())
     }
 }

@@ -1,0 +1,90 @@
+//! Minimum-jerk hand plans (Flash & Hogan 1985) on the integer tick clock.
+
+use nalgebra::Vector2;
+
+use crate::error::ArmError;
+use crate::time::TICK_HZ;
+
+/// Planned hand position [m], velocity [m/s] and acceleration [m/s²] in one frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandRef {
+    /// Position [m].
+    pub pos_m: Vector2<f64>,
+    /// Velocity [m/s].
+    pub vel_m_s: Vector2<f64>,
+    /// Acceleration [m/s²].
+    pub acc_m_s2: Vector2<f64>,
+}
+
+/// A straight minimum-jerk movement from `start_m` to `goal_m`, beginning at
+/// `start_tick` and lasting `duration_ticks`; at rest at `start_m` before and at
+/// `goal_m` after.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MinJerk {
+    start_m: Vector2<f64>,
+    goal_m: Vector2<f64>,
+    start_tick: u64,
+    duration_ticks: u64,
+}
+
+impl MinJerk {
+    /// A plan; errors on a zero duration or non-finite points.
+    pub fn new(
+        start_m: Vector2<f64>,
+        goal_m: Vector2<f64>,
+        start_tick: u64,
+        duration_ticks: u64,
+    ) -> Result<MinJerk, ArmError> {
+        if duration_ticks == 0 {
+            return Err(ArmError::InvalidParameter {
+                key: "duration_ticks",
+                reason: "must be > 0".into(),
+            });
+        }
+        if !(start_m.iter().chain(goal_m.iter()).all(|x| x.is_finite())) {
+            return Err(ArmError::NonFinite {
+                what: "reach start/goal",
+            });
+        }
+        Ok(MinJerk {
+            start_m,
+            goal_m,
+            start_tick,
+            duration_ticks,
+        })
+    }
+
+    /// Start point [m].
+    pub fn start_m(&self) -> Vector2<f64> {
+        self.start_m
+    }
+
+    /// Goal point [m].
+    pub fn goal_m(&self) -> Vector2<f64> {
+        self.goal_m
+    }
+
+    /// Duration [s].
+    pub fn duration_s(&self) -> f64 {
+        self.duration_ticks as f64 / TICK_HZ as f64
+    }
+
+    /// The plan at a tick: x = x₀ + Δ(10s³ − 15s⁴ + 6s⁵), s = (t − t₀)/T clamped to [0, 1].
+    pub fn at(&self, tick: u64) -> HandRef {
+        let elapsed = tick
+            .saturating_sub(self.start_tick)
+            .min(self.duration_ticks);
+        let s = elapsed as f64 / self.duration_ticks as f64;
+        let t = self.duration_s();
+        let d = self.goal_m - self.start_m;
+        let (s2, s3) = (s * s, s * s * s);
+        let pos = 10.0 * s3 - 15.0 * s3 * s + 6.0 * s3 * s2;
+        let vel = (30.0 * s2 - 60.0 * s3 + 30.0 * s2 * s2) / t;
+        let acc = (60.0 * s - 180.0 * s2 + 120.0 * s3) / (t * t);
+        HandRef {
+            pos_m: self.start_m + d * pos,
+            vel_m_s: d * vel,
+            acc_m_s2: d * acc,
+        }
+    }
+}
