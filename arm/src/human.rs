@@ -23,7 +23,7 @@
 //! the handle with `F_cmd` when the hand is on the imposed path (`v₀` of eq. 7 is the
 //! bias). The bias follows the co-contraction level, which may rise during a trial.
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -417,20 +417,39 @@ impl Human {
     }
 
     /// Joint bias that makes muscles plus feedback press `force_n` at posture `q`.
-    /// Fixed-point iteration because the stiffness grows with the feedback activation.
+    ///
+    /// Solves `Aᵀ(a(Δq) + K_m(a) ∘ e) − Aᵀ a_FF = Jᵀ F` with `e = A Δq` and
+    /// `a = max(0, a_FF + G_p e)` (the settled feedback; a muscle at zero activation
+    /// cannot relax further, so its feedback is rectified) by Newton's method on this
+    /// piecewise-smooth map, starting from zero. Six iterations reach round-off for the
+    /// forces of 001_*; the human's internal model is taken to be exact.
     fn hold_bias(&self, q: [f64; 2], force_n: [f64; 2], a_ff: &[f64; MUSCLES]) -> [f64; 2] {
-        let tau = jacobian(&self.params, q).transpose() * Vector2::new(force_n[0], force_n[1]);
+        let target = jacobian(&self.params, q).transpose() * Vector2::new(force_n[0], force_n[1]);
         let gp = self.params.feedback.position_gain_n_per_m;
-        let k_fb = self.model.to_joint(&[gp; MUSCLES]);
+        let mp = self.model.params();
         let mut bias = Vector2::zeros();
-        for _ in 0..4 {
+        for _ in 0..6 {
             let e = self.model.stretch([0.0; 2], [bias.x, bias.y]);
             let a: [f64; MUSCLES] = std::array::from_fn(|i| (a_ff[i] + gp * e[i]).max(0.0));
-            let k: Matrix2<f64> = self.model.joint_stiffness(&a, self.scale) + k_fb;
-            match k.try_inverse() {
-                Some(ki) => bias = ki * tau,
-                None => break,
-            }
+            let km = self.model.stiffness(&a, self.scale);
+            let extra: [f64; MUSCLES] = std::array::from_fn(|i| a[i] - a_ff[i] + km[i] * e[i]);
+            let t = self.model.joint_torque(&extra);
+            let residual = target - Vector2::new(t[0], t[1]);
+            // d(extra_i)/d(e_i): K_m plus, where the feedback is not rectified, the
+            // feedback gain and the stiffness it adds.
+            let slope: [f64; MUSCLES] = std::array::from_fn(|i| {
+                let active = a_ff[i] + gp * e[i] > 0.0;
+                km[i]
+                    + if active {
+                        gp * (1.0 + self.scale * mp.stiffness_per_activation_per_m[i] * e[i])
+                    } else {
+                        0.0
+                    }
+            });
+            let Some(ki) = self.model.to_joint(&slope).try_inverse() else {
+                break;
+            };
+            bias += ki * residual;
         }
         [bias.x, bias.y]
     }

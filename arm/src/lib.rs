@@ -32,7 +32,7 @@
 //! ## Chosen stiffness levels
 //!
 //! `K₀ = 450 N/m` (Katayama & Kawato's 810.8 N/m scaled by their/our moment arm ratio
-//! squared), `K₁ = 100 /m`, co-contraction of 1.2 N m at the shoulder and 2.2 N m at the
+//! squared), `K₁ = 100 /m`, co-contraction of 1.0 N m at the shoulder and 2.6 N m at the
 //! elbow. During the default Börner reach this puts the intrinsic endpoint stiffness at
 //! x₂ = 0.4 m near Table 1 of 000_* (K ≈ [[110, −106], [−106, 314]] N/m). With the
 //! seed's `D_m = K_m/12` the damping is `K/12`, which matches Table 1's D₁₁, D₁₂ but not

@@ -66,7 +66,7 @@ impl Default for MuscleParams {
             stiffness_passive_n_per_m: [450.0; MUSCLES],
             stiffness_per_activation_per_m: [100.0; MUSCLES],
             damping_time_s: [1.0 / 12.0; MUSCLES],
-            co_contraction_n_m: [1.2, 2.2],
+            co_contraction_n_m: [1.0, 2.6],
         }
     }
 }
