@@ -4,14 +4,76 @@
 //! against the simulator. It never depends on the physics engine, the viewer, the arm
 //! model or the runtime: the only way in and out is [`io::RigIo`], in rig units.
 //!
+//! ## Units and frames
+//!
 //! Units are SI throughout (m, s, N, kg) unless a name says otherwise; positions are in
 //! the rig frame (origin at the workspace centre, `x` to the subject's right, `y` away
-//! from the subject, horizontal plane).
+//! from the subject, horizontal plane). Angles of perturbations are radians from `+x`
+//! toward `+y`. The hardware speaks encoder counts and the force sensor's raw reading
+//! in its own frame; [`calib`] converts them (`F_rig = R (F_raw − offset)`). Forces
+//! `force_n` are what the hand exerts on the handle. Time is the integer [`Tick`] of the
+//! 4 kHz clock; the motor command is recomputed every `control_rate_hz /
+//! motor_rate_hz` ticks (2 kHz) and held in between.
+//!
+//! ## The controller
+//!
+//! [`Controller::tick`] does read → update → write once per tick:
+//!
+//! ```text
+//!  sensors ─▶ counts→m, calibrate force, filtered-difference velocity
+//!          ─▶ safety checks (e-stop, I/O, non-finite/stale force, encoder jump,
+//!             velocity, position, missed tick)          ── trip ─▶ Fault, zero force
+//!          ─▶ perturbations: force pulse u_pert (000_* eq. 22-23),
+//!             position offset p (001_*, min-snap transitions)
+//!          ─▶ law, exact step for the held input:
+//!               admittance    M ẍ_r + D ẋ_r = F + u_pert + F_wall      (000_* eq. 20)
+//!               virtual spring M_e ẍ_e + B_e(ẋ_e − ẋ_a) + K_e(x_e − x_a) = F + …
+//!                             anchored to the imposed sinusoid x_a     (001_* eq. 4)
+//!          ─▶ render (motor ticks): F_cmd = m ẍ_ref + K_p e + K_d ė, clamped
+//!          ─▶ write
+//! ```
+//!
+//! ## Lifecycle
+//!
+//! ```text
+//!   Controller::new(config)          first tick          activate()
+//!  ───────────────────────▶ Configured ─────────▶ Inactive ─────────▶ Active
+//!                               │               ▲  │  ▲◀── deactivate() ──┘ │
+//!                               │     reset()   │  │  │                     │
+//!                               │  (e-stop off) │  │  │ any trip (e-stop, I/O,
+//!                               ▼               │  ▼  │  sensor, limits) in any mode
+//!                             Fault ◀───────────┴─────┴─────────────────────┘
+//!                     zero force, latched
+//! ```
+//!
+//! `Configured`, `Inactive` and `Fault` command zero force; the safety layer watches in
+//! every mode. A trip records a [`safety::SafetyEvent`] `{tick, reason}` in a
+//! fixed-capacity log and the command written at that very tick is zero.
+//!
+//! ## Real time
+//!
+//! `tick` never allocates, locks or does I/O beyond the [`RigIo`] calls; everything is
+//! precomputed in [`Controller::new`] (discretizations, the pulse's closed form). A
+//! counting-allocator test proves it.
 
+pub mod admittance;
+pub mod calib;
+pub mod config;
+pub mod controller;
 pub mod estimate;
 pub mod io;
+pub mod motion;
+pub mod perturb;
+pub mod render;
+pub mod safety;
 pub mod signal;
+pub mod spring;
+pub mod testing;
 pub mod time;
+pub mod velocity;
 
+pub use config::{ConfigError, ControllerConfig, LawKind};
+pub use controller::{Controller, LifecycleError, Mode, TickReport};
 pub use io::{ErrorKind, MotorCommand, RigIo, RigIoError, SensorFrame};
+pub use perturb::PerturbationStatus;
 pub use time::{Rate, Tick};

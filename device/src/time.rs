@@ -4,7 +4,9 @@
 use serde::{Deserialize, Serialize};
 
 /// One tick of the control clock: the `n`-th period since the clock started.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Default, Serialize, Deserialize,
+)]
 pub struct Tick(pub u64);
 
 impl Tick {
@@ -50,7 +52,11 @@ impl Rate {
     /// Number of ticks of `self` per tick of `slower`, if `slower` divides `self` exactly.
     #[must_use]
     pub const fn divisor_of(self, slower: Rate) -> Option<u32> {
-        if slower.0 <= self.0 && self.0 % slower.0 == 0 { Some(self.0 / slower.0) } else { None }
+        if slower.0 <= self.0 && self.0.is_multiple_of(slower.0) {
+            Some(self.0 / slower.0)
+        } else {
+            None
+        }
     }
 }
 
@@ -69,7 +75,10 @@ mod tests {
     fn divisors_are_integer_only() {
         let motor = Rate::new(2000).unwrap_or(Rate::CONTROL);
         assert_eq!(Rate::CONTROL.divisor_of(motor), Some(2));
-        assert_eq!(Rate::CONTROL.divisor_of(Rate::new(3000).unwrap_or(Rate::CONTROL)), None);
+        assert_eq!(
+            Rate::CONTROL.divisor_of(Rate::new(3000).unwrap_or(Rate::CONTROL)),
+            None
+        );
         assert!(Rate::new(0).is_none());
     }
 }

@@ -1,0 +1,99 @@
+//! Perturbations the rig applies: the force pulse of 000_* (added to the admittance
+//! input) and the position perturbation of 001_* (added to the rendered reference),
+//! their triggers, and the seeded schedules that decide angles and order.
+//!
+//! Generators are armed from outside the loop (no allocation), fire on their trigger
+//! inside `tick`, and report their status and onset tick.
+
+pub mod force_pulse;
+pub mod position;
+pub mod schedule;
+
+use crate::time::Tick;
+
+/// Where a perturbation generator is in its life.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PerturbationStatus {
+    /// Nothing armed.
+    #[default]
+    Idle,
+    /// Armed, waiting for its trigger.
+    Armed,
+    /// Running since `onset`.
+    Running {
+        /// The tick the trigger fired (the profile's `t = 0`).
+        onset: Tick,
+    },
+    /// Ran to completion.
+    Done {
+        /// The tick it started.
+        onset: Tick,
+    },
+    /// Cut short by a fault or deactivation.
+    Aborted {
+        /// The tick it started.
+        onset: Tick,
+    },
+}
+
+impl PerturbationStatus {
+    /// True while the perturbation is being applied.
+    #[must_use]
+    pub fn is_running(self) -> bool {
+        matches!(self, PerturbationStatus::Running { .. })
+    }
+
+    /// The onset tick of the running or last perturbation, if any.
+    #[must_use]
+    pub fn onset(self) -> Option<Tick> {
+        match self {
+            PerturbationStatus::Running { onset }
+            | PerturbationStatus::Done { onset }
+            | PerturbationStatus::Aborted { onset } => Some(onset),
+            PerturbationStatus::Idle | PerturbationStatus::Armed => None,
+        }
+    }
+}
+
+/// Which way a line must be crossed to fire a trigger.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Crossing {
+    /// From below the line to at-or-above it.
+    Rising,
+    /// From above the line to at-or-below it.
+    Falling,
+    /// Either way.
+    Either,
+}
+
+impl Crossing {
+    /// True if going from `before` to `after` crosses `line` this way.
+    #[must_use]
+    pub fn crossed(self, before: f64, after: f64, line: f64) -> bool {
+        let up = before < line && after >= line;
+        let down = before > line && after <= line;
+        match self {
+            Crossing::Rising => up,
+            Crossing::Falling => down,
+            Crossing::Either => up || down,
+        }
+    }
+}
+
+/// Why a perturbation could not be armed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ArmError {
+    /// The direction angle is NaN or infinite.
+    #[error("perturbation angle must be finite")]
+    NonFiniteAngle,
+    /// A line-crossing trigger's line is NaN or infinite.
+    #[error("trigger line position must be finite")]
+    NonFiniteLine,
+    /// A perturbation of this kind is already running.
+    #[error("a perturbation of this kind is already running")]
+    AlreadyRunning,
+    /// The trigger needs the imposed motion, but the virtual-spring law is not selected.
+    #[error("zero-acceleration triggers need the virtual-spring law with its imposed motion")]
+    NoImposedMotion,
+}
