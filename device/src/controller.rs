@@ -78,8 +78,8 @@ pub struct TickReport {
     /// Virtual-spring anchor (imposed motion), m; in admittance mode equal to the
     /// admittance reference.
     pub anchor_position_m: [f64; 2],
-    /// Reference the carts are driven to during this tick (the law's state at the end
-    /// of the tick's period plus the position perturbation), m.
+    /// Reference the carts are driven to at this tick (the law's state at this tick's
+    /// time, from the inputs up to the previous tick, plus the position perturbation), m.
     pub ref_position_m: [f64; 2],
     /// Reference velocity, m/s.
     pub ref_velocity_m_per_s: [f64; 2],
@@ -520,43 +520,43 @@ impl Controller {
         }
         let p = self.push.update(now);
         let add = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| [a[0] + b[0] + c[0], a[1] + b[1] + c[1]];
+        // The reference for this tick is the law's state at t_n (time-aligned with the
+        // encoder reading); the input read now is then held over [t_n, t_n+1) to advance
+        // the state to t_n+1 for the next tick.
         let (pos, vel, acc, anchor, wall) = match self.law {
             LawKind::Admittance => {
-                let wall = self
-                    .safety
-                    .wall_force(self.admittance.position_m, self.admittance.velocity_m_per_s);
+                let (pos, vel) = (self.admittance.position_m, self.admittance.velocity_m_per_s);
+                let wall = self.safety.wall_force(pos, vel);
                 let u = add(self.force_n, pert, wall);
-                self.admittance.step(u);
                 let acc = self.admittance.acceleration(u);
-                let pos = self.admittance.position_m;
-                (pos, self.admittance.velocity_m_per_s, acc, pos, wall)
+                self.admittance.step(u);
+                (pos, vel, acc, pos, wall)
             }
             LawKind::VirtualSpring => {
                 let axis = self.motion.axis().index();
                 let h = self.rate.period_s();
+                let along = |offset: f64| {
+                    let mut p = self.center_m;
+                    p[axis] += offset;
+                    p
+                };
+                let on_axis = |v: f64| {
+                    let mut p = [0.0; 2];
+                    p[axis] = v;
+                    p
+                };
+                let now_k = self.motion.at(k);
+                let (a_now, v_now) = (along(now_k.position_m), on_axis(now_k.velocity_m_per_s));
                 // The anchor is held over the tick at its mid-period value (second-order
                 // accurate for the moving anchor; exact for a still one).
                 let mid = self.motion.at_seconds((k as f64 + 0.5) * h);
-                let end = self.motion.at(k + 1);
-                let (mut a_mid, mut v_mid) = (self.center_m, [0.0; 2]);
-                a_mid[axis] += mid.position_m;
-                v_mid[axis] = mid.velocity_m_per_s;
-                let (mut a_end, mut v_end) = (self.center_m, [0.0; 2]);
-                a_end[axis] += end.position_m;
-                v_end[axis] = end.velocity_m_per_s;
-                let wall = self
-                    .safety
-                    .wall_force(self.spring.position_m, self.spring.velocity_m_per_s);
+                let (a_mid, v_mid) = (along(mid.position_m), on_axis(mid.velocity_m_per_s));
+                let (pos, vel) = (self.spring.position_m, self.spring.velocity_m_per_s);
+                let wall = self.safety.wall_force(pos, vel);
                 let f = add(self.force_n, pert, wall);
+                let acc = self.spring.acceleration(f, a_now, v_now);
                 self.spring.step(f, a_mid, v_mid);
-                let acc = self.spring.acceleration(f, a_end, v_end);
-                (
-                    self.spring.position_m,
-                    self.spring.velocity_m_per_s,
-                    acc,
-                    a_end,
-                    wall,
-                )
+                (pos, vel, acc, a_now, wall)
             }
         };
         let ref_pos = [pos[0] + p[0].position_m, pos[1] + p[1].position_m];
