@@ -19,7 +19,7 @@ impl<T: Copy> DelayLine<T> {
         }
     }
 
-    /// Longest readable lag [samples].
+    /// Longest readable lag \[samples\].
     pub fn max_lag(&self) -> usize {
         self.buf.len() - 1
     }

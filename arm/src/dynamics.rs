@@ -7,7 +7,7 @@
 //!
 //! M11 = I1 + I2 + m1 r1² + m2 (l1² + r2² + 2 l1 r2 cos q2),
 //! M12 = M21 = I2 + m2 (r2² + l1 r2 cos q2), M22 = I2 + m2 r2²,
-//! C q̇ = h [−(2 q̇1 q̇2 + q̇2²), q̇1²]ᵀ with h = m2 l1 r2 sin q2.
+//! C q̇ = h \[−(2 q̇1 q̇2 + q̇2²), q̇1²\]ᵀ with h = m2 l1 r2 sin q2.
 //!
 //! Torques in N m, angles in rad, time in s.
 
@@ -15,16 +15,16 @@ use nalgebra::{Matrix2, Vector2};
 
 use crate::params::ArmParams;
 
-/// Joint angles [rad] and velocities [rad/s]; see [`crate::kinematics`] for the angle convention.
+/// Joint angles \[rad\] and velocities \[rad/s\]; see [`crate::kinematics`] for the angle convention.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
 pub struct JointState {
-    /// Shoulder angle from +x, elbow angle relative to the upper arm [rad].
+    /// Shoulder angle from +x, elbow angle relative to the upper arm \[rad\].
     pub q: [f64; 2],
-    /// Their rates [rad/s].
+    /// Their rates \[rad/s\].
     pub qd: [f64; 2],
 }
 
-/// Joint-space inertia matrix M(q) [kg m²]; symmetric positive definite.
+/// Joint-space inertia matrix M(q) \[kg m²\]; symmetric positive definite.
 pub fn mass_matrix(p: &ArmParams, q: [f64; 2]) -> Matrix2<f64> {
     let (u, f) = (&p.upper, &p.fore);
     let c2 = q[1].cos();
@@ -38,7 +38,7 @@ pub fn mass_matrix(p: &ArmParams, q: [f64; 2]) -> Matrix2<f64> {
     Matrix2::new(m11, m12, m12, m22)
 }
 
-/// Coriolis and centrifugal torques C(q, q̇) q̇ [N m].
+/// Coriolis and centrifugal torques C(q, q̇) q̇ \[N m\].
 pub fn coriolis(p: &ArmParams, q: [f64; 2], qd: [f64; 2]) -> Vector2<f64> {
     let h = p.fore.mass_kg * p.upper.length_m * p.fore.com_m * q[1].sin();
     Vector2::new(
@@ -47,12 +47,12 @@ pub fn coriolis(p: &ArmParams, q: [f64; 2], qd: [f64; 2]) -> Vector2<f64> {
     )
 }
 
-/// Torques [N m] that produce acceleration `qdd` [rad/s²] at state (q, q̇).
+/// Torques \[N m\] that produce acceleration `qdd` \[rad/s²\] at state (q, q̇).
 pub fn inverse_dynamics(p: &ArmParams, q: [f64; 2], qd: [f64; 2], qdd: [f64; 2]) -> Vector2<f64> {
     mass_matrix(p, q) * Vector2::new(qdd[0], qdd[1]) + coriolis(p, q, qd)
 }
 
-/// Joint acceleration [rad/s²] under torques `tau` [N m].
+/// Joint acceleration \[rad/s²\] under torques `tau` \[N m\].
 ///
 /// Solves the 2×2 system in closed form; M is positive definite for any physical
 /// [`ArmParams`] (see [`ArmParams::validate`]), so the determinant is positive.
@@ -66,13 +66,13 @@ pub fn forward_dynamics(p: &ArmParams, q: [f64; 2], qd: [f64; 2], tau: [f64; 2])
     )
 }
 
-/// Kinetic energy ½ q̇ᵀ M q̇ [J].
+/// Kinetic energy ½ q̇ᵀ M q̇ \[J\].
 pub fn kinetic_energy(p: &ArmParams, s: &JointState) -> f64 {
     let v = Vector2::new(s.qd[0], s.qd[1]);
     0.5 * v.dot(&(mass_matrix(p, s.q) * v))
 }
 
-/// One classical fourth-order Runge–Kutta step of length `dt_s` [s] with `tau` [N m]
+/// One classical fourth-order Runge–Kutta step of length `dt_s` \[s\] with `tau` \[N m\]
 /// held constant over the step.
 pub fn rk4_step(p: &ArmParams, s: &JointState, tau: [f64; 2], dt_s: f64) -> JointState {
     let deriv = |q: [f64; 2], qd: [f64; 2]| -> ([f64; 2], [f64; 2]) {

@@ -10,17 +10,17 @@ pub enum ArmError {
         "hand at distance {distance_m:.4} m from the shoulder is out of reach [{min_m:.4}, {max_m:.4}] m"
     )]
     Unreachable {
-        /// Distance of the requested hand position from the shoulder [m].
+        /// Distance of the requested hand position from the shoulder \[m\].
         distance_m: f64,
-        /// Innermost reachable distance |l1 − l2| [m].
+        /// Innermost reachable distance |l1 − l2| \[m\].
         min_m: f64,
-        /// Outermost reachable distance l1 + l2 [m].
+        /// Outermost reachable distance l1 + l2 \[m\].
         max_m: f64,
     },
     /// A configuration where the Jacobian is singular (arm straight or folded).
     #[error("kinematic singularity: det J = {det_m2:e} m²")]
     Singular {
-        /// Determinant of the Jacobian [m²].
+        /// Determinant of the Jacobian \[m²\].
         det_m2: f64,
     },
     /// A parameter outside its physical range.

@@ -2,7 +2,7 @@
 //! muscles that turn them into joint torques. The runtime calls [`Human::update`] once
 //! per 4 kHz tick, in order.
 //!
-//! Per neural tick (every `neural_divisor` ticks) the activations [N] are recomputed:
+//! Per neural tick (every `neural_divisor` ticks) the activations \[N\] are recomputed:
 //!
 //! `a = max(0, a_FF + a_FB + a_SR + a_N)`, with
 //! - `a_FF`: the feed-forward torque (inverse dynamics of the planned joint motion,
@@ -42,11 +42,11 @@ use crate::time::{TICK_HZ, ms_to_periods, ticks_to_s};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Admittance {
-    /// Virtual mass (x, y) [kg].
+    /// Virtual mass (x, y) \[kg\].
     pub mass_kg: [f64; 2],
-    /// Virtual damping (x, y) [N s/m].
+    /// Virtual damping (x, y) \[N s/m\].
     pub damping_n_s_per_m: [f64; 2],
-    /// Physical handle mass moved with the hand [kg].
+    /// Physical handle mass moved with the hand \[kg\].
     pub handle_mass_kg: f64,
 }
 
@@ -59,8 +59,8 @@ impl Admittance {
         handle_mass_kg: 0.0,
     };
 
-    /// Force [N] the hand must apply to move the admittance with velocity `v` [m/s] and
-    /// acceleration `acc` [m/s²].
+    /// Force \[N\] the hand must apply to move the admittance with velocity `v` \[m/s\] and
+    /// acceleration `acc` \[m/s²\].
     pub fn force_n(&self, v: Vector2<f64>, acc: Vector2<f64>) -> Vector2<f64> {
         Vector2::new(
             (self.mass_kg[0] + self.handle_mass_kg) * acc.x + self.damping_n_s_per_m[0] * v.x,
@@ -73,13 +73,13 @@ impl Admittance {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ReachTask {
-    /// Start of the hand [m, rig frame].
+    /// Start of the hand \[m, rig frame\].
     pub start_rig_m: [f64; 2],
-    /// Goal of the hand [m, rig frame].
+    /// Goal of the hand \[m, rig frame\].
     pub goal_rig_m: [f64; 2],
-    /// Movement onset [tick].
+    /// Movement onset \[tick\].
     pub start_tick: u64,
-    /// Movement duration [ticks].
+    /// Movement duration \[ticks\].
     pub duration_ticks: u64,
     /// The admittance the hand pushes along the plan.
     pub admittance: Admittance,
@@ -90,11 +90,11 @@ pub struct ReachTask {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImposedSinusoid {
-    /// Amplitude (x, y) [m].
+    /// Amplitude (x, y) \[m\].
     pub amplitude_m: [f64; 2],
-    /// Frequency [Hz] (0.125 Hz in 001_*).
+    /// Frequency \[Hz\] (0.125 Hz in 001_*).
     pub frequency_hz: f64,
-    /// Onset [tick].
+    /// Onset \[tick\].
     pub start_tick: u64,
 }
 
@@ -102,13 +102,13 @@ pub struct ImposedSinusoid {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HoldTask {
-    /// Where the hand holds the handle, centre of any imposed motion [m, rig frame].
+    /// Where the hand holds the handle, centre of any imposed motion \[m, rig frame\].
     pub hand_rig_m: [f64; 2],
-    /// Force the hand is to exert on the handle [N, rig frame].
+    /// Force the hand is to exert on the handle \[N, rig frame\].
     pub force_n: [f64; 2],
     /// Motion imposed by the rig, if any.
     pub imposed: Option<ImposedSinusoid>,
-    /// Rise of the co-contraction level within the trial [1/s] (0 = constant).
+    /// Rise of the co-contraction level within the trial \[1/s\] (0 = constant).
     pub co_contraction_rise_per_s: f64,
 }
 
@@ -125,14 +125,14 @@ pub enum Task {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct HumanConfig {
-    /// Shoulder position [m, rig frame]. Default (0, −0.425): the reach midpoint of
+    /// Shoulder position \[m, rig frame\]. Default (0, −0.425): the reach midpoint of
     /// 000_* at the rig origin.
     pub shoulder_rig_m: [f64; 2],
     /// Neural update every this many ticks; divides 4000. Default 4 (1 kHz).
     pub neural_divisor: u32,
     /// 0-based trial number in the session (drives [`crate::params::StiffnessDrift`]).
     pub trial_index: u32,
-    /// Co-contraction level at the start of the trial [-] (1 = the params' default).
+    /// Co-contraction level at the start of the trial \[-\] (1 = the params' default).
     pub co_contraction_level: f64,
 }
 
@@ -150,11 +150,11 @@ impl Default for HumanConfig {
 /// Planned joint motion and the torque that realises it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct JointRef {
-    /// Planned angles [rad].
+    /// Planned angles \[rad\].
     pub q: [f64; 2],
-    /// Planned rates [rad/s].
+    /// Planned rates \[rad/s\].
     pub qd: [f64; 2],
-    /// Feed-forward torque [N m].
+    /// Feed-forward torque \[N m\].
     pub tau_ff_n_m: [f64; 2],
 }
 
@@ -165,6 +165,7 @@ pub struct Human {
     model: MuscleModel,
     task: Task,
     config: HumanConfig,
+    /// The reach plan (None when holding).
     plan: Option<MinJerk>,
     shoulder: Vector2<f64>,
     scale: f64,
@@ -332,27 +333,27 @@ impl Human {
         self.fb_lag
     }
 
-    /// Stiffness-drift scale of this trial [-].
+    /// Stiffness-drift scale of this trial \[-\].
     pub fn stiffness_scale(&self) -> f64 {
         self.scale
     }
 
-    /// Activations held since the last neural tick [N], order SF, SE, EF, EE, BF, BE.
+    /// Activations held since the last neural tick \[N\], order SF, SE, EF, EE, BF, BE.
     pub fn activations_n(&self) -> [f64; MUSCLES] {
         self.activations_n
     }
 
-    /// Tensions of the last update [N].
+    /// Tensions of the last update \[N\].
     pub fn tensions_n(&self) -> [f64; MUSCLES] {
         self.tensions_n
     }
 
-    /// Joint-space bias of the force-holding reference [rad] (zero when reaching).
+    /// Joint-space bias of the force-holding reference \[rad\] (zero when reaching).
     pub fn bias_rad(&self) -> [f64; 2] {
         self.bias_rad
     }
 
-    /// Co-contraction level at a tick [-].
+    /// Co-contraction level at a tick \[-\].
     pub fn co_contraction_level(&self, tick: u64) -> f64 {
         let rise = match &self.task {
             Task::Hold(h) => h.co_contraction_rise_per_s * ticks_to_s(tick),
@@ -363,33 +364,28 @@ impl Human {
 
     /// Planned hand position, velocity, acceleration at a tick in the shoulder frame.
     fn hand_plan(&self, tick: u64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
-        match (&self.task, &self.plan) {
-            (Task::Reach(_), Some(plan)) => {
-                let h = plan.at(tick);
-                (h.pos_m - self.shoulder, h.vel_m_s, h.acc_m_s2)
+        if let Some(plan) = &self.plan {
+            let h = plan.at(tick);
+            return (h.pos_m - self.shoulder, h.vel_m_s, h.acc_m_s2);
+        }
+        let (centre, imposed) = match &self.task {
+            Task::Hold(h) => (Vector2::new(h.hand_rig_m[0], h.hand_rig_m[1]), h.imposed),
+            // `new` gives every reach a plan; this arm only keeps the match total.
+            Task::Reach(r) => (Vector2::new(r.start_rig_m[0], r.start_rig_m[1]), None),
+        };
+        let c = centre - self.shoulder;
+        match imposed {
+            Some(s) if tick >= s.start_tick => {
+                let amp = Vector2::new(s.amplitude_m[0], s.amplitude_m[1]);
+                let w = std::f64::consts::TAU * s.frequency_hz;
+                let phase = w * ticks_to_s(tick - s.start_tick);
+                (
+                    c + amp * phase.sin(),
+                    amp * (w * phase.cos()),
+                    -amp * (w * w * phase.sin()),
+                )
             }
-            (Task::Hold(h), _) => {
-                let c = Vector2::new(h.hand_rig_m[0], h.hand_rig_m[1]) - self.shoulder;
-                match &h.imposed {
-                    Some(s) if tick >= s.start_tick => {
-                        let amp = Vector2::new(s.amplitude_m[0], s.amplitude_m[1]);
-                        let w = std::f64::consts::TAU * s.frequency_hz;
-                        let phase = w * ticks_to_s(tick - s.start_tick);
-                        (
-                            c + amp * phase.sin(),
-                            amp * (w * phase.cos()),
-                            -amp * (w * w * phase.sin()),
-                        )
-                    }
-                    _ => (c, Vector2::zeros(), Vector2::zeros()),
-                }
-            }
-            // A reach always has a plan (set in `new`); hold still if it ever had none.
-            (Task::Reach(r), None) => (
-                Vector2::new(r.start_rig_m[0], r.start_rig_m[1]) - self.shoulder,
-                Vector2::zeros(),
-                Vector2::zeros(),
-            ),
+            _ => (c, Vector2::zeros(), Vector2::zeros()),
         }
     }
 
@@ -465,7 +461,7 @@ impl Human {
         )
     }
 
-    /// Joint torques (shoulder, elbow) [N m] from the muscles at `tick` for the joint
+    /// Joint torques (shoulder, elbow) \[N m\] from the muscles at `tick` for the joint
     /// state the plant reports. Call once per tick, in increasing tick order.
     pub fn update(&mut self, tick: u64, state: &JointState) -> [f64; 2] {
         // Reachability was checked at construction; a failure here could only come from

@@ -18,11 +18,11 @@ use crate::params::ArmParams;
 /// Endpoint impedance in the shoulder/rig frame axes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EndpointImpedance {
-    /// Apparent endpoint inertia [kg].
+    /// Apparent endpoint inertia \[kg\].
     pub mass_kg: Matrix2<f64>,
-    /// Intrinsic endpoint damping [N s/m].
+    /// Intrinsic endpoint damping \[N s/m\].
     pub damping_n_s_per_m: Matrix2<f64>,
-    /// Intrinsic endpoint stiffness [N/m].
+    /// Intrinsic endpoint stiffness \[N/m\].
     pub stiffness_n_per_m: Matrix2<f64>,
 }
 
@@ -58,8 +58,8 @@ pub fn endpoint_impedance_scaled(
     })
 }
 
-/// The arm's endpoint inertia and intrinsic stiffness and damping at posture `q` [rad]
-/// and muscle activations [N] (order SF, SE, EF, EE, BF, BE), without stiffness drift.
+/// The arm's endpoint inertia and intrinsic stiffness and damping at posture `q` \[rad\]
+/// and muscle activations \[N\] (order SF, SE, EF, EE, BF, BE), without stiffness drift.
 pub fn endpoint_impedance(
     p: &ArmParams,
     q: [f64; 2],

@@ -27,20 +27,20 @@ pub enum Elbow {
     Up,
 }
 
-/// Elbow position in the shoulder frame [m].
+/// Elbow position in the shoulder frame \[m\].
 pub fn elbow(p: &ArmParams, q: [f64; 2]) -> Vector2<f64> {
     let l1 = p.upper.length_m;
     Vector2::new(l1 * q[0].cos(), l1 * q[0].sin())
 }
 
-/// Hand (handle) position in the shoulder frame [m].
+/// Hand (handle) position in the shoulder frame \[m\].
 pub fn forward(p: &ArmParams, q: [f64; 2]) -> Vector2<f64> {
     let l2 = p.fore.length_m;
     let a = q[0] + q[1];
     elbow(p, q) + Vector2::new(l2 * a.cos(), l2 * a.sin())
 }
 
-/// Joint angles [rad] that put the hand at `hand` [m, shoulder frame].
+/// Joint angles \[rad\] that put the hand at `hand` \[m, shoulder frame\].
 ///
 /// Errors with [`ArmError::Unreachable`] outside the annulus |l1 − l2| ≤ r ≤ l1 + l2
 /// and [`ArmError::NonFinite`] on NaN/inf input. `q[0]` is wrapped to (−π, π].
@@ -72,7 +72,7 @@ pub fn inverse(p: &ArmParams, hand: Vector2<f64>, which: Elbow) -> Result<[f64; 
     Ok([q0, q1])
 }
 
-/// Jacobian ∂x/∂q of the hand position [m/rad].
+/// Jacobian ∂x/∂q of the hand position \[m/rad\].
 pub fn jacobian(p: &ArmParams, q: [f64; 2]) -> Matrix2<f64> {
     let (l1, l2) = (p.upper.length_m, p.fore.length_m);
     let (s1, c1) = q[0].sin_cos();
@@ -80,7 +80,7 @@ pub fn jacobian(p: &ArmParams, q: [f64; 2]) -> Matrix2<f64> {
     Matrix2::new(-l1 * s1 - l2 * s12, -l2 * s12, l1 * c1 + l2 * c12, l2 * c12)
 }
 
-/// Time derivative of the Jacobian, dJ/dt for joint velocity `qd` [m/(rad s)].
+/// Time derivative of the Jacobian, dJ/dt for joint velocity `qd` \[m/(rad s)\].
 pub fn jacobian_dot(p: &ArmParams, q: [f64; 2], qd: [f64; 2]) -> Matrix2<f64> {
     let (l1, l2) = (p.upper.length_m, p.fore.length_m);
     let (s1, c1) = q[0].sin_cos();
@@ -94,13 +94,13 @@ pub fn jacobian_dot(p: &ArmParams, q: [f64; 2], qd: [f64; 2]) -> Matrix2<f64> {
     )
 }
 
-/// Hand velocity [m/s] for joint velocity `qd` [rad/s].
+/// Hand velocity \[m/s\] for joint velocity `qd` \[rad/s\].
 pub fn hand_velocity(p: &ArmParams, q: [f64; 2], qd: [f64; 2]) -> Vector2<f64> {
     jacobian(p, q) * Vector2::new(qd[0], qd[1])
 }
 
-/// Joint velocity and acceleration [rad/s, rad/s²] that realise a hand velocity [m/s]
-/// and acceleration [m/s²] at `q`: q̇ = J⁻¹ẋ, q̈ = J⁻¹(ẍ − J̇ q̇).
+/// Joint velocity and acceleration \[rad/s, rad/s²\] that realise a hand velocity \[m/s\]
+/// and acceleration \[m/s²\] at `q`: q̇ = J⁻¹ẋ, q̈ = J⁻¹(ẍ − J̇ q̇).
 pub fn joint_rates(
     p: &ArmParams,
     q: [f64; 2],

@@ -19,11 +19,11 @@
 //!
 //! # Muscle model (000_* section 4, eq. 33–35)
 //!
-//! Six lumped muscles SF, SE, EF, EE, BF, BE with constant moment arms `A` [m]
+//! Six lumped muscles SF, SE, EF, EE, BF, BE with constant moment arms `A` \[m\]
 //! (Selen, Franklin & Wolpert 2009). Length `l = l₀ − A q`; tension
 //! `m = a + D_m ė + K_m e` with `e = −A (q − q_plan)` the stretch beyond the planned
 //! length, `K_m = K₀ + K₁ a`, `D_m = K_m / 12`; joint torque `τ = Aᵀ m` ([`muscles`]).
-//! Activations `a ≥ 0` [N] are feed-forward (inverse dynamics of a minimum-jerk plan
+//! Activations `a ≥ 0` \[N\] are feed-forward (inverse dynamics of a minimum-jerk plan
 //! plus the force that moves the rig's admittance, split over the muscles with a
 //! torque-free co-contraction), delayed PD feedback at muscle level (60 ms), optional
 //! stretch reflex, and signal-dependent noise from a seeded ChaCha8 stream ([`human`],
@@ -34,7 +34,7 @@
 //! `K₀ = 450 N/m` (Katayama & Kawato's 810.8 N/m scaled by their/our moment arm ratio
 //! squared), `K₁ = 100 /m`, co-contraction of 1.0 N m at the shoulder and 2.6 N m at the
 //! elbow. During the default Börner reach this puts the intrinsic endpoint stiffness at
-//! x₂ = 0.4 m near Table 1 of 000_* (K ≈ [[110, −106], [−106, 314]] N/m). With the
+//! x₂ = 0.4 m near Table 1 of 000_* (K ≈ [\[110, −106\], \[−106, 314\]] N/m). With the
 //! seed's `D_m = K_m/12` the damping is `K/12`, which matches Table 1's D₁₁, D₁₂ but not
 //! its small D₂₂; `damping_time_s` is per muscle to allow fitting it.
 //!

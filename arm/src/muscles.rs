@@ -4,17 +4,17 @@
 //! flexor (EF), elbow extensor (EE), biarticular flexor (BF), biarticular extensor (BE).
 //!
 //! - **Lengths** from constant moment arms: `l = l₀ − A q` with `A` the 6×2 moment-arm
-//!   matrix [m] (row = muscle, columns = shoulder, elbow). Only length *differences*
+//!   matrix \[m\] (row = muscle, columns = shoulder, elbow). Only length *differences*
 //!   enter the model, so `l₀` cancels and is not a parameter.
-//! - **Activation** `a ≥ 0` [N] is the active tension (the seed sets m_A = a).
-//! - **Tension** `m = a + D_m ė + K_m e` [N], with `e = l − l_ref = −A (q − q_ref)` the
-//!   muscle stretch beyond the planned length, `K_m = s (K₀ + K₁ a)` [N/m],
-//!   `D_m = τ_d K_m` [N s/m] (`τ_d` = 1/12 s in the seed), `s` the stiffness-drift
+//! - **Activation** `a ≥ 0` \[N\] is the active tension (the seed sets m_A = a).
+//! - **Tension** `m = a + D_m ė + K_m e` \[N\], with `e = l − l_ref = −A (q − q_ref)` the
+//!   muscle stretch beyond the planned length, `K_m = s (K₀ + K₁ a)` \[N/m\],
+//!   `D_m = τ_d K_m` \[N s/m\] (`τ_d` = 1/12 s in the seed), `s` the stiffness-drift
 //!   scale (1 unless [`crate::params::StiffnessDrift`] is on). The law is linear, as in
 //!   the seed: tension is not clipped at zero, so a muscle stretched far below its
 //!   planned length can "push"; with the default co-contraction this needs errors of
 //!   centimetres.
-//! - **Joint torque** `τ = Aᵀ m` [N m]; so the intrinsic joint stiffness is
+//! - **Joint torque** `τ = Aᵀ m` \[N m\]; so the intrinsic joint stiffness is
 //!   `K_q = Aᵀ diag(K_m) A` and the damping `D_q = Aᵀ diag(D_m) A`.
 
 use nalgebra::{Matrix2, SMatrix, Vector2};
@@ -32,20 +32,20 @@ pub const MUSCLE_NAMES: [&str; MUSCLES] = ["SF", "SE", "EF", "EE", "BF", "BE"];
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MuscleParams {
-    /// Moment arms (shoulder, elbow) [m], rows SF, SE, EF, EE, BF, BE.
+    /// Moment arms (shoulder, elbow) \[m\], rows SF, SE, EF, EE, BF, BE.
     /// Default: Selen, Franklin & Wolpert 2009, Table 1.
     pub moment_arms_m: [[f64; 2]; MUSCLES],
-    /// `K₀`, stiffness of the passive muscle [N/m]. Default 450 N/m for every muscle:
+    /// `K₀`, stiffness of the passive muscle \[N/m\]. Default 450 N/m for every muscle:
     /// Katayama & Kawato's k₀ = 810.8 N/m scaled by (their moment arm / ours)² ≈ 0.56 so
     /// that the joint stiffness per muscle is kept.
     pub stiffness_passive_n_per_m: [f64; MUSCLES],
-    /// `K₁`, stiffness added per newton of activation [N/m per N = 1/m]. Default 100 /m:
+    /// `K₁`, stiffness added per newton of activation \[N/m per N = 1/m\]. Default 100 /m:
     /// tension/stiffness = 1 cm, within the range of short-range muscle stiffness.
     pub stiffness_per_activation_per_m: [f64; MUSCLES],
-    /// `τ_d` in `D_m = τ_d K_m` [s]. Default 1/12 s (000_* eq. 35).
+    /// `τ_d` in `D_m = τ_d K_m` \[s\]. Default 1/12 s (000_* eq. 35).
     pub damping_time_s: [f64; MUSCLES],
     /// Co-contraction as a torque each monoarticular pair pulls against itself
-    /// (shoulder, elbow) [N m]: the shoulder pair then carries c/|r| N each, the elbow
+    /// (shoulder, elbow) \[N m\]: the shoulder pair then carries c/|r| N each, the elbow
     /// flexor c/r_EF, the extensor c/|r_EE|, so the net torque is zero. Scaled at run
     /// time by the task's co-contraction level. Defaults are chosen so that the
     /// endpoint stiffness during the Börner reach lands on Table 1 (see the crate docs).
@@ -75,13 +75,13 @@ impl Default for MuscleParams {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MuscleModel {
     params: MuscleParams,
-    /// A [m], 6×2.
+    /// A \[m\], 6×2.
     arms: SMatrix<f64, MUSCLES, 2>,
-    /// A (AᵀA)⁻¹ [1/m], 6×2: the minimum-norm split of a torque over the muscles.
+    /// A (AᵀA)⁻¹ \[1/m\], 6×2: the minimum-norm split of a torque over the muscles.
     split: SMatrix<f64, MUSCLES, 2>,
     /// Positive torque-free pattern used to lift a split to non-negative activations.
     lift: [f64; MUSCLES],
-    /// Torque-free co-contraction pattern for one unit of the params' co-contraction [N].
+    /// Torque-free co-contraction pattern for one unit of the params' co-contraction \[N\].
     co_pattern_n: [f64; MUSCLES],
 }
 
@@ -182,13 +182,13 @@ impl MuscleModel {
         &self.params
     }
 
-    /// The moment-arm matrix A [m] (6×2).
+    /// The moment-arm matrix A \[m\] (6×2).
     pub fn moment_arms(&self) -> &SMatrix<f64, MUSCLES, 2> {
         &self.arms
     }
 
-    /// Muscle stretch beyond the reference, `e = −A (q − q_ref)` [m]; also valid for
-    /// rates: `ė = −A (q̇ − q̇_ref)` [m/s].
+    /// Muscle stretch beyond the reference, `e = −A (q − q_ref)` \[m\]; also valid for
+    /// rates: `ė = −A (q̇ − q̇_ref)` \[m/s\].
     pub fn stretch(&self, q: [f64; 2], q_ref: [f64; 2]) -> [f64; MUSCLES] {
         let d = [q[0] - q_ref[0], q[1] - q_ref[1]];
         let mut e = [0.0; MUSCLES];
@@ -198,7 +198,7 @@ impl MuscleModel {
         e
     }
 
-    /// Muscle stiffness `K_m = scale (K₀ + K₁ a)` [N/m] at activations `a` [N].
+    /// Muscle stiffness `K_m = scale (K₀ + K₁ a)` \[N/m\] at activations `a` \[N\].
     pub fn stiffness(&self, activations_n: &[f64; MUSCLES], scale: f64) -> [f64; MUSCLES] {
         let p = &self.params;
         std::array::from_fn(|i| {
@@ -208,7 +208,7 @@ impl MuscleModel {
         })
     }
 
-    /// Muscle tensions `m = a + D_m ė + K_m e` [N].
+    /// Muscle tensions `m = a + D_m ė + K_m e` \[N\].
     pub fn tensions(
         &self,
         activations_n: &[f64; MUSCLES],
@@ -223,7 +223,7 @@ impl MuscleModel {
         })
     }
 
-    /// Joint torques `Aᵀ m` [N m] of muscle tensions `m` [N].
+    /// Joint torques `Aᵀ m` \[N m\] of muscle tensions `m` \[N\].
     pub fn joint_torque(&self, tensions_n: &[f64; MUSCLES]) -> [f64; 2] {
         let mut tau = [0.0; 2];
         for (i, m) in tensions_n.iter().enumerate() {
@@ -233,7 +233,7 @@ impl MuscleModel {
         tau
     }
 
-    /// `Aᵀ diag(w) A` for per-muscle weights `w` [N/m → N m/rad, N s/m → N m s/rad].
+    /// `Aᵀ diag(w) A` for per-muscle weights `w` \[N/m → N m/rad, N s/m → N m s/rad\].
     pub fn to_joint(&self, per_muscle: &[f64; MUSCLES]) -> Matrix2<f64> {
         let mut k = Matrix2::zeros();
         for (i, w) in per_muscle.iter().enumerate() {
@@ -243,26 +243,26 @@ impl MuscleModel {
         k
     }
 
-    /// Intrinsic joint stiffness `K_q = Aᵀ diag(K_m) A` [N m/rad].
+    /// Intrinsic joint stiffness `K_q = Aᵀ diag(K_m) A` \[N m/rad\].
     pub fn joint_stiffness(&self, activations_n: &[f64; MUSCLES], scale: f64) -> Matrix2<f64> {
         self.to_joint(&self.stiffness(activations_n, scale))
     }
 
-    /// Intrinsic joint damping `D_q = Aᵀ diag(τ_d K_m) A` [N m s/rad].
+    /// Intrinsic joint damping `D_q = Aᵀ diag(τ_d K_m) A` \[N m s/rad\].
     pub fn joint_damping(&self, activations_n: &[f64; MUSCLES], scale: f64) -> Matrix2<f64> {
         let k = self.stiffness(activations_n, scale);
         let d: [f64; MUSCLES] = std::array::from_fn(|i| k[i] * self.params.damping_time_s[i]);
         self.to_joint(&d)
     }
 
-    /// Co-contraction activations [N] for a level (1 = the params' `co_contraction_n_m`).
+    /// Co-contraction activations \[N\] for a level (1 = the params' `co_contraction_n_m`).
     /// Torque-free: `Aᵀ c = 0`.
     pub fn co_contraction(&self, level: f64) -> [f64; MUSCLES] {
         self.co_pattern_n.map(|x| x * level.max(0.0))
     }
 
-    /// Non-negative activations [N] that produce joint torque `tau` [N m] on top of a
-    /// torque-free co-contraction `co_n` [N] (e.g. from [`MuscleModel::co_contraction`]).
+    /// Non-negative activations \[N\] that produce joint torque `tau` \[N m\] on top of a
+    /// torque-free co-contraction `co_n` \[N\] (e.g. from [`MuscleModel::co_contraction`]).
     ///
     /// Closed form: the minimum-norm split `a₀ = A (AᵀA)⁻¹ τ`, lifted by the smallest
     /// multiple λ ≥ 0 of the positive torque-free pattern `n` (the projection of (1,…,1)

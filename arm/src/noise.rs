@@ -4,7 +4,7 @@
 //! Each muscle carries an Ornstein–Uhlenbeck process w (leaky Brownian motion) of unit
 //! stationary variance and correlation time τ_n, updated once per neural tick:
 //! `w ← φ w + √(1 − φ²) ξ`, `φ = exp(−Δt/τ_n)`, ξ ~ N(0, 1). The noise activation is
-//! `a_N = cv · a · w` [N], so its standard deviation is `cv` times the activation.
+//! `a_N = cv · a · w` \[N\], so its standard deviation is `cv` times the activation.
 //! A pure Brownian motion would wander without bound over a session; the leak keeps it
 //! zero-mean and stationary while it stays Brownian on time scales below τ_n.
 
@@ -19,10 +19,10 @@ use crate::muscles::MUSCLES;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseParams {
-    /// Coefficient of variation of the activation [-]. Default 0.02 (unverified;
+    /// Coefficient of variation of the activation \[-\]. Default 0.02 (unverified;
     /// set 0 for a noiseless arm).
     pub activation_cv: f64,
-    /// Correlation time τ_n of the leaky Brownian motion [ms]. Default 50 ms (unverified).
+    /// Correlation time τ_n of the leaky Brownian motion \[ms\]. Default 50 ms (unverified).
     pub time_constant_ms: f64,
 }
 
@@ -46,7 +46,7 @@ pub struct MotorNoise {
 }
 
 impl MotorNoise {
-    /// Noise updated every `period_s` [s]; the initial state is drawn from the
+    /// Noise updated every `period_s` \[s\]; the initial state is drawn from the
     /// stationary distribution so there is no start-up transient.
     pub fn new(params: &NoiseParams, period_s: f64, mut rng: ChaCha8Rng) -> MotorNoise {
         let tau_s = params.time_constant_ms * 1e-3;
@@ -65,8 +65,8 @@ impl MotorNoise {
         }
     }
 
-    /// Advances one neural tick and returns the noise activations [N] for the
-    /// noiseless activations `a` [N].
+    /// Advances one neural tick and returns the noise activations \[N\] for the
+    /// noiseless activations `a` \[N\].
     pub fn step(&mut self, activations_n: &[f64; MUSCLES]) -> [f64; MUSCLES] {
         for w in &mut self.w {
             let xi: f64 = self.rng.sample(StandardNormal);

@@ -13,13 +13,13 @@ use crate::noise::NoiseParams;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Segment {
-    /// Joint-to-joint (or joint-to-hand) length [m].
+    /// Joint-to-joint (or joint-to-hand) length \[m\].
     pub length_m: f64,
-    /// Mass [kg].
+    /// Mass \[kg\].
     pub mass_kg: f64,
-    /// Distance of the centre of mass from the proximal joint, along the link [m].
+    /// Distance of the centre of mass from the proximal joint, along the link \[m\].
     pub com_m: f64,
-    /// Moment of inertia about the centre of mass, perpendicular to the plane [kg m²].
+    /// Moment of inertia about the centre of mass, perpendicular to the plane \[kg m²\].
     pub inertia_kg_m2: f64,
 }
 
@@ -39,7 +39,7 @@ impl Segment {
         inertia_kg_m2: 0.0188,
     };
 
-    /// The same segment rescaled to a subject's measured length [m].
+    /// The same segment rescaled to a subject's measured length \[m\].
     ///
     /// Geometric similarity at constant mass: the centre of mass keeps its fractional
     /// position (`com_m` scales by `s = length_m / self.length_m`) and the radius of
@@ -83,16 +83,16 @@ impl Segment {
 }
 
 /// Delayed PD feedback on the muscle-level tracking error (000_* section 4):
-/// `a_FB(t) = G_p e(t − δ) + G_d ė(t − δ)` [N] for each muscle.
+/// `a_FB(t) = G_p e(t − δ) + G_d ė(t − δ)` \[N\] for each muscle.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FeedbackParams {
-    /// Delay δ [ms]; must be a whole number of neural ticks. Default 60 ms (000_* δ_s).
+    /// Delay δ \[ms\]; must be a whole number of neural ticks. Default 60 ms (000_* δ_s).
     pub delay_ms: f64,
-    /// Position gain G_p [N of activation per m of stretch]. Default 500 N/m (chosen:
+    /// Position gain G_p \[N of activation per m of stretch\]. Default 500 N/m (chosen:
     /// adds about a third of the intrinsic joint stiffness, stable with the 60 ms delay).
     pub position_gain_n_per_m: f64,
-    /// Velocity gain G_d [N s/m]. Default 25 N s/m (chosen, same ratio 1/20 s).
+    /// Velocity gain G_d \[N s/m\]. Default 25 N s/m (chosen, same ratio 1/20 s).
     pub velocity_gain_n_s_per_m: f64,
 }
 
@@ -107,14 +107,14 @@ impl Default for FeedbackParams {
 }
 
 /// Extension (off by default): short-latency stretch reflex. Each muscle adds the
-/// activation `gain · ė(t − delay)` [N], with ė its stretch velocity relative to the plan.
+/// activation `gain · ė(t − delay)` \[N\], with ė its stretch velocity relative to the plan.
 /// Linear (not rectified) so it appears in estimates as a delayed damping.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StretchReflex {
-    /// Reflex delay [ms], 10–40 ms in humans (000_* section 2); whole neural ticks.
+    /// Reflex delay \[ms\], 10–40 ms in humans (000_* section 2); whole neural ticks.
     pub delay_ms: f64,
-    /// Gain [N of activation per m/s of stretch velocity].
+    /// Gain \[N of activation per m/s of stretch velocity\].
     pub gain_n_s_per_m: f64,
 }
 
@@ -132,7 +132,7 @@ impl StretchReflex {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StiffnessDrift {
-    /// Factor per trial [-], e.g. 1.01 for +1 % per trial.
+    /// Factor per trial \[-\], e.g. 1.01 for +1 % per trial.
     pub scale_per_trial: f64,
 }
 
@@ -180,7 +180,7 @@ impl Default for ArmParams {
 }
 
 impl ArmParams {
-    /// The default arm with a subject's segment lengths [m] (the session manifest's
+    /// The default arm with a subject's segment lengths \[m\] (the session manifest's
     /// `upper_arm_m`, `forearm_m`); see [`Segment::scaled_to_length`] for the scaling.
     pub fn with_lengths(upper_arm_m: f64, forearm_m: f64) -> Result<ArmParams, ArmError> {
         let mut arm = ArmParams::default();

@@ -5,14 +5,14 @@ use nalgebra::Vector2;
 use crate::error::ArmError;
 use crate::time::TICK_HZ;
 
-/// Planned hand position [m], velocity [m/s] and acceleration [m/s²] in one frame.
+/// Planned hand position \[m\], velocity \[m/s\] and acceleration \[m/s²\] in one frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HandRef {
-    /// Position [m].
+    /// Position \[m\].
     pub pos_m: Vector2<f64>,
-    /// Velocity [m/s].
+    /// Velocity \[m/s\].
     pub vel_m_s: Vector2<f64>,
-    /// Acceleration [m/s²].
+    /// Acceleration \[m/s²\].
     pub acc_m_s2: Vector2<f64>,
 }
 
@@ -54,22 +54,22 @@ impl MinJerk {
         })
     }
 
-    /// Start point [m].
+    /// Start point \[m\].
     pub fn start_m(&self) -> Vector2<f64> {
         self.start_m
     }
 
-    /// Goal point [m].
+    /// Goal point \[m\].
     pub fn goal_m(&self) -> Vector2<f64> {
         self.goal_m
     }
 
-    /// Duration [s].
+    /// Duration \[s\].
     pub fn duration_s(&self) -> f64 {
         self.duration_ticks as f64 / TICK_HZ as f64
     }
 
-    /// The plan at a tick: x = x₀ + Δ(10s³ − 15s⁴ + 6s⁵), s = (t − t₀)/T clamped to [0, 1].
+    /// The plan at a tick: x = x₀ + Δ(10s³ − 15s⁴ + 6s⁵), s = (t − t₀)/T clamped to \[0, 1\].
     pub fn at(&self, tick: u64) -> HandRef {
         let elapsed = tick
             .saturating_sub(self.start_tick)

@@ -1,10 +1,10 @@
 //! The control clock. Every time in this crate is a whole number of 4 kHz ticks;
 //! seconds are derived from a tick count by one division, never accumulated.
 
-/// Rate of the rig's control clock [Hz].
+/// Rate of the rig's control clock \[Hz\].
 pub const TICK_HZ: u64 = 4000;
 
-/// Seconds corresponding to a tick count [s].
+/// Seconds corresponding to a tick count \[s\].
 pub fn ticks_to_s(ticks: u64) -> f64 {
     ticks as f64 / TICK_HZ as f64
 }
