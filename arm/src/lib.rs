@@ -34,9 +34,15 @@
 //! `K₀ = 450 N/m` (Katayama & Kawato's 810.8 N/m scaled by their/our moment arm ratio
 //! squared), `K₁ = 100 /m`, co-contraction of 1.0 N m at the shoulder and 2.6 N m at the
 //! elbow. During the default Börner reach this puts the intrinsic endpoint stiffness at
-//! x₂ = 0.4 m near Table 1 of 000_* (K ≈ [\[110, −106\], \[−106, 314\]] N/m). With the
-//! seed's `D_m = K_m/12` the damping is `K/12`, which matches Table 1's D₁₁, D₁₂ but not
-//! its small D₂₂; `damping_time_s` is per muscle to allow fitting it.
+//! x₂ = 0.4 m within one standard deviation of Table 1 of 000_*: K ≈ [[128, −75],
+//! [−75, 306]] N/m against [[110.5 ± 48.5, −106 ± 63], [·, 313.8 ± 77.5]] N/m. With the
+//! seed's `D_m = K_m/12` the damping is `K/12` ≈ [[10.7, −6.2], [−6.2, 25.5]] N s/m,
+//! which matches Table 1's D₁₁, D₁₂ but not its small D₂₂ (6.75 ± 4.27 N s/m);
+//! [`muscles::MuscleParams::table1_damping`] lowers the elbow monoarticulars' damping
+//! time to 10 ms and fits all of D (≈ [[10.7, −6.2], [−6.2, 8.3]] N s/m). The levels are
+//! the parameters `co_contraction_n_m`, `stiffness_passive_n_per_m`,
+//! `stiffness_per_activation_per_m`, `damping_time_s`, and the per-trial
+//! [`human::HumanConfig::co_contraction_level`].
 //!
 //! # Ground truth
 //!

@@ -13,6 +13,7 @@ use rigtwin_arm::ArmError;
 use rigtwin_arm::dynamics::JointState;
 use rigtwin_arm::human::{Admittance, HoldTask, Human, HumanConfig, ReachTask, Task};
 use rigtwin_arm::kinematics::{forward, jacobian};
+use rigtwin_arm::muscles::MuscleParams;
 use rigtwin_arm::params::{ArmParams, StiffnessDrift, StretchReflex};
 
 const DT: f64 = 1.0 / 4000.0;
@@ -340,4 +341,33 @@ fn hold_keeps_the_force_on_an_imposed_sinusoid() {
     }
     eprintln!("hold on sinusoid: worst force error {worst:.4} N");
     assert!(worst < 0.2, "worst force error {worst} N");
+}
+
+/// With [`MuscleParams::table1_damping`] the reach's endpoint damping at x₂ = 0.4 m lies
+/// within one std of all four entries of Table 1 (D = [[10.98 ± 4.85, −7.94 ± 3.26],
+/// [−8.54 ± 4.16, 6.75 ± 4.27]] N s/m; the symmetric D is compared with both
+/// off-diagonals) and the stiffness is the same as with the seed's damping (the
+/// damping only changes the motion, by less than 2 %).
+#[test]
+fn table1_damping_preset_puts_d_within_one_std() {
+    let p = ArmParams {
+        muscles: MuscleParams::table1_damping(),
+        ..ArmParams::default()
+    };
+    let r = run_reach(p, 7);
+    let d = r.d_at_04;
+    eprintln!("table1_damping: D(x2=0.4) = {d:.2} K = {:.1}", r.k_at_04);
+    assert!((d[(0, 0)] - 10.98).abs() < 4.85, "D = {d}");
+    assert!(
+        (d[(0, 1)] + 7.94).abs() < 3.26 && (d[(1, 0)] + 8.54).abs() < 4.16,
+        "D = {d}"
+    );
+    assert!((d[(1, 1)] - 6.75).abs() < 4.27, "D = {d}");
+    let k0 = run_reach(ArmParams::default(), 7).k_at_04;
+    assert!(
+        (r.k_at_04 - k0).norm() < 0.02 * k0.norm(),
+        "{} vs {}",
+        r.k_at_04,
+        k0
+    );
 }
