@@ -32,7 +32,9 @@ pub struct MotorCommand {
 
 impl MotorCommand {
     /// No force on either axis.
-    pub const ZERO: MotorCommand = MotorCommand { force_n: [0.0, 0.0] };
+    pub const ZERO: MotorCommand = MotorCommand {
+        force_n: [0.0, 0.0],
+    };
 }
 
 /// The broad class of a hardware error, so the controller can react without knowing

@@ -1,5 +1,7 @@
 //! The admittance law (000_* eq. 20) inside the controller, against its closed form.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+// Loops over the two axes index several per-axis arrays at once.
+#![allow(clippy::needless_range_loop)]
 
 use rigtwin_device::calib::ForceCalibration;
 use rigtwin_device::testing::{MockRig, PointMassRig};
@@ -121,9 +123,8 @@ fn carts_track_the_admittance_reference_in_closed_loop() {
     c.tick(&mut rig, Tick(0));
     c.activate().unwrap();
     let mut worst = [0.0_f64; 2];
-    let mut r = c.report().to_owned();
     for n in 1..=8000u64 {
-        r = c.tick(&mut rig, Tick(n));
+        let r = c.tick(&mut rig, Tick(n));
         assert_eq!(r.mode, Mode::Active, "tripped: {:?}", c.events().last());
         if n > 400 {
             for i in 0..2 {

@@ -1,5 +1,7 @@
 //! The virtual spring (001_* eq. 4) and the imposed motion inside the controller.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+// Loops over the two axes index several per-axis arrays at once.
+#![allow(clippy::needless_range_loop)]
 
 use rigtwin_device::testing::{MockRig, PointMassRig};
 use rigtwin_device::{Controller, ControllerConfig, LawKind, Mode, Rate, Tick};
