@@ -39,6 +39,8 @@ pub use edge::EdgeMode;
 pub use error::SignalError;
 pub use filtfilt::{filtfilt, lfilter, lfilter_zi};
 pub use savgol::{savgol_coeffs, savgol_filter};
-pub use savgol_cutoff::{savgol_cutoff_for_window, savgol_window_for_cutoff};
+pub use savgol_cutoff::{
+    savgol_cutoff_for_window, savgol_measured_cutoff_hz, savgol_window_for_cutoff,
+};
 pub use sos::{Sos, sosfilt, sosfilt_with_state, sosfilt_zi, sosfiltfilt};
 pub use welch::{Psd, welch};
