@@ -128,6 +128,7 @@ pub struct Controller {
     saturated: [bool; 2],
     motion_start: Option<Tick>,
     center_m: [f64; 2],
+    clock: Tick,
     report: TickReport,
 }
 
@@ -174,6 +175,7 @@ impl Controller {
             saturated: [false; 2],
             motion_start: None,
             center_m: [0.0; 2],
+            clock: Tick(0),
             report: TickReport {
                 law: config.law,
                 ..TickReport::default()
@@ -393,6 +395,13 @@ impl Controller {
         self.mode = Mode::Fault;
     }
 
+    /// One control period on the controller's own clock: the tick after the last one
+    /// passed to [`Controller::tick`] or `step` (tick 0 first). For lock-step loops
+    /// that keep no clock of their own.
+    pub fn step<I: RigIo>(&mut self, io: &mut I) -> TickReport {
+        self.tick(io, self.clock)
+    }
+
     /// One control period at tick `now`: read → update → write. Returns this tick's
     /// report. Never allocates.
     pub fn tick<I: RigIo>(&mut self, io: &mut I, now: Tick) -> TickReport {
@@ -430,6 +439,7 @@ impl Controller {
             );
         }
         self.last_tick = Some(now);
+        self.clock = now.next();
         let r = &mut self.report;
         r.tick = now;
         r.mode = self.mode;

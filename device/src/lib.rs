@@ -36,19 +36,49 @@
 //! ## Lifecycle
 //!
 //! ```text
-//!   Controller::new(config)          first tick          activate()
-//!  ───────────────────────▶ Configured ─────────▶ Inactive ─────────▶ Active
-//!                               │               ▲  │  ▲◀── deactivate() ──┘ │
-//!                               │     reset()   │  │  │                     │
-//!                               │  (e-stop off) │  │  │ any trip (e-stop, I/O,
-//!                               ▼               │  ▼  │  sensor, limits) in any mode
-//!                             Fault ◀───────────┴─────┴─────────────────────┘
-//!                     zero force, latched
+//!        Controller::new(config)
+//!                 │
+//!                 ▼
+//!          ┌────────────┐ first tick  ┌──────────┐  activate()   ┌────────┐
+//!          │ Configured │────────────▶│ Inactive │──────────────▶│ Active │
+//!          │  0 force   │             │ 0 force  │◀──────────────│        │
+//!          └────────────┘             └──────────┘  deactivate() └────────┘
+//!                 │                     ▲      │                     │
+//!                 │  trip     reset()   │      │ trip                │ trip
+//!                 │      (e-stop off)   │      ▼                     │
+//!                 │                   ┌──────────────────┐           │
+//!                 └──────────────────▶│ Fault: 0 force,  │◀──────────┘
+//!                                     │ latched          │
+//!                                     └──────────────────┘
 //! ```
+//!
+//! A trip is an e-stop, an I/O error, a non-finite or frozen force sensor, an encoder
+//! jump, a velocity or position limit, or (while active) a missed tick.
 //!
 //! `Configured`, `Inactive` and `Fault` command zero force; the safety layer watches in
 //! every mode. A trip records a [`safety::SafetyEvent`] `{tick, reason}` in a
 //! fixed-capacity log and the command written at that very tick is zero.
+//!
+//! ## Example
+//!
+//! ```
+//! use rigtwin_device::perturb::force_pulse::PulseTrigger;
+//! use rigtwin_device::testing::MockRig;
+//! use rigtwin_device::{Controller, ControllerConfig, Mode, Tick};
+//!
+//! let mut rig = MockRig::default(); // or world's SimRig, or a replay
+//! rig.frame.force_raw_n = [2.0, 0.0];
+//! let mut ctl = Controller::new(ControllerConfig::default())?; // the Börner rig
+//! ctl.tick(&mut rig, Tick(0)); // Configured → Inactive
+//! ctl.activate()?;
+//! ctl.arm_force_pulse(30f64.to_radians(), PulseTrigger::AtTick(Tick(100)))?;
+//! for n in 1..=1000 {
+//!     let report = ctl.tick(&mut rig, Tick(n));
+//!     assert_eq!(report.mode, Mode::Active);
+//! }
+//! assert_eq!(ctl.force_pulse_status().onset(), Some(Tick(100)));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 //!
 //! ## Real time
 //!
