@@ -35,49 +35,92 @@ fn check_window(window: usize, polyorder: usize) -> Result<(), SignalError> {
     Ok(())
 }
 
-/// Weights `w` (in data order: `w[j]` multiplies sample `j` of the window) giving the
-/// `deriv`-th derivative, per unit of `delta`, at abscissa `pos` (in samples from the
-/// window start) of the least-squares polynomial of order `polyorder` through the
-/// `window` samples.
-fn lsq_weights(
+/// Least-squares polynomial fit over a window of `window` equally spaced samples,
+/// factored once (Householder QR of the Vandermonde matrix in the abscissa scaled
+/// to `[-1, 1]`) and reused for every evaluation point and data window.
+struct LsqFit {
     window: usize,
     polyorder: usize,
-    deriv: usize,
-    delta: f64,
-    pos: f64,
-) -> Result<Vec<f64>, SignalError> {
-    if deriv > polyorder {
-        return Ok(vec![0.0; window]);
-    }
-    let centre = (window as f64 - 1.0) / 2.0;
-    let scale = centre.max(1.0);
-    let cols = polyorder + 1;
-    let v = DMatrix::from_fn(window, cols, |j, k| {
-        let u = (j as f64 - centre) / scale;
-        u.powi(k as i32)
-    });
-    // g_k = d^deriv/dt^deriv of (u(t))^k at t = pos, where u = (t - centre) / scale and
-    // t is in units of delta: k!/(k-deriv)! u0^(k-deriv) / (scale·delta)^deriv.
-    let u0 = (pos - centre) / scale;
-    let denom = (scale * delta).powi(deriv as i32);
-    let g = DVector::from_fn(cols, |k, _| {
-        if k < deriv {
-            0.0
-        } else {
-            let falling: f64 = ((k - deriv + 1)..=k).map(|m| m as f64).product();
-            falling * u0.powi((k - deriv) as i32) / denom
+    centre: f64,
+    scale: f64,
+    q: DMatrix<f64>,
+    r: DMatrix<f64>,
+}
+
+impl LsqFit {
+    fn new(window: usize, polyorder: usize) -> Self {
+        let centre = (window as f64 - 1.0) / 2.0;
+        let scale = centre.max(1.0);
+        let v = DMatrix::from_fn(window, polyorder + 1, |j, k| {
+            let u = (j as f64 - centre) / scale;
+            u.powi(k as i32)
+        });
+        let qr = v.qr();
+        Self {
+            window,
+            polyorder,
+            centre,
+            scale,
+            q: qr.q(),
+            r: qr.r(),
         }
-    });
-    let qr = v.qr();
-    let r_t = qr.r().transpose();
-    let z = r_t
-        .solve_lower_triangular(&g)
-        .ok_or(SignalError::BadOrder {
-            order: polyorder,
+    }
+
+    /// `g_k` = d^deriv/dt^deriv of `u(t)^k` at `t = pos` (samples from the window
+    /// start), with `u = (t − centre)/scale` and t in units of `delta`:
+    /// `k!/(k−deriv)! · u0^(k−deriv) / (scale·delta)^deriv`.
+    fn functional(&self, deriv: usize, delta: f64, pos: f64) -> DVector<f64> {
+        let u0 = (pos - self.centre) / self.scale;
+        let denom = (self.scale * delta).powi(deriv as i32);
+        DVector::from_fn(self.polyorder + 1, |k, _| {
+            if k < deriv {
+                0.0
+            } else {
+                let falling: f64 = ((k - deriv + 1)..=k).map(|m| m as f64).product();
+                falling * u0.powi((k - deriv) as i32) / denom
+            }
+        })
+    }
+
+    fn singular(&self) -> SignalError {
+        SignalError::BadOrder {
+            order: self.polyorder,
             why: "the least-squares polynomial fit is singular",
-        })?;
-    let w = qr.q() * z;
-    Ok(w.iter().copied().collect())
+        }
+    }
+
+    /// Weights `w` (data order: `w[j]` multiplies sample `j` of the window) giving
+    /// the `deriv`-th derivative per unit `delta` at `pos` of the fitted polynomial:
+    /// `w = Q R⁻ᵀ g`.
+    fn weights(&self, deriv: usize, delta: f64, pos: f64) -> Result<Vec<f64>, SignalError> {
+        if deriv > self.polyorder {
+            return Ok(vec![0.0; self.window]);
+        }
+        let g = self.functional(deriv, delta, pos);
+        let z = self
+            .r
+            .transpose()
+            .solve_lower_triangular(&g)
+            .ok_or_else(|| self.singular())?;
+        Ok((&self.q * z).iter().copied().collect())
+    }
+
+    /// Polynomial coefficients (in the scaled abscissa) fitted to `x`
+    /// (`x.len() == window`): `a = R⁻¹ Qᵀ x`.
+    fn fit(&self, x: &[f64]) -> Result<DVector<f64>, SignalError> {
+        let qtx = self.q.tr_mul(&DVector::from_column_slice(x));
+        self.r
+            .solve_upper_triangular(&qtx)
+            .ok_or_else(|| self.singular())
+    }
+
+    /// The `deriv`-th derivative per unit `delta` at `pos` of the polynomial `a`.
+    fn eval(&self, a: &DVector<f64>, deriv: usize, delta: f64, pos: f64) -> f64 {
+        if deriv > self.polyorder {
+            return 0.0;
+        }
+        self.functional(deriv, delta, pos).dot(a)
+    }
 }
 
 /// Savitzky–Golay FIR coefficients, as `scipy.signal.savgol_coeffs(window, polyorder,
@@ -101,7 +144,7 @@ pub fn savgol_coeffs(
 ) -> Result<Vec<f64>, SignalError> {
     check_window(window, polyorder)?;
     check_rate("delta", delta)?;
-    let mut w = lsq_weights(window, polyorder, deriv, delta, (window / 2) as f64)?;
+    let mut w = LsqFit::new(window, polyorder).weights(deriv, delta, (window / 2) as f64)?;
     w.reverse();
     Ok(w)
 }
@@ -137,20 +180,21 @@ pub fn savgol_filter(
     check_finite(x)?;
     let n = x.len();
     let half = window / 2;
-    let h = lsq_weights(window, polyorder, deriv, delta, half as f64)?;
+    let lsq = LsqFit::new(window, polyorder);
+    let h = lsq.weights(deriv, delta, half as f64)?;
     let mut y = vec![0.0; n];
     if mode == EdgeMode::Interp {
         for (i, out) in y.iter_mut().enumerate().take(n - half).skip(half) {
             *out = dot(&h, &x[i - half..i + half + 1]);
         }
-        let left = &x[..window];
-        let right = &x[n - window..];
+        // Edges: the polynomial fitted to the first / last window, evaluated at the
+        // samples the centred filter cannot reach (scipy's `_fit_edges_polyfit`).
+        let left = lsq.fit(&x[..window])?;
+        let right = lsq.fit(&x[n - window..])?;
         for i in 0..half {
-            let w = lsq_weights(window, polyorder, deriv, delta, i as f64)?;
-            y[i] = dot(&w, left);
+            y[i] = lsq.eval(&left, deriv, delta, i as f64);
             let pos = window - half + i;
-            let w = lsq_weights(window, polyorder, deriv, delta, pos as f64)?;
-            y[n - half + i] = dot(&w, right);
+            y[n - half + i] = lsq.eval(&right, deriv, delta, pos as f64);
         }
     } else {
         for (i, out) in y.iter_mut().enumerate() {
