@@ -1,1 +1,4 @@
 //! rigtwin — the runtime and command line.
+
+pub mod replay;
+pub mod session;

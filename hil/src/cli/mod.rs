@@ -1,0 +1,41 @@
+//! The `rigtwin` command line: one subcommand per module, each with an `Args` struct
+//! (clap derive, `after_help` examples) and a `run(&Args) -> anyhow::Result<()>`.
+//!
+//! To add a subcommand: write `cli/<name>.rs` with `pub struct Args` and `pub fn run`,
+//! declare the module below, add a variant to [`Command`] and an arm to [`run`].
+
+use clap::{Parser, Subcommand};
+
+pub mod inspect;
+
+/// rigtwin: a hardware-in-the-loop co-simulation of a planar haptic manipulandum and
+/// the human arm that holds it.
+#[derive(Debug, Parser)]
+#[command(name = "rigtwin", version, about, propagate_version = true)]
+#[command(after_help = "\
+Examples:
+  rigtwin inspect ../shared/recordings/example-none
+  rigtwin inspect session/ --json
+  rigtwin help inspect")]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Summarise a recorded session: manifest, channels, one line per trial.
+    Inspect(inspect::Args),
+}
+
+/// Runs the parsed command line.
+///
+/// # Errors
+/// Whatever the subcommand reports; `main` prints it with its causes.
+pub fn run(cli: &Cli) -> anyhow::Result<()> {
+    match &cli.command {
+        Command::Inspect(args) => inspect::run(args),
+    }
+}

@@ -1,0 +1,196 @@
+//! Sessions: the recording format, version 1 (`shared/specs/recording-format.md`).
+//!
+//! A session is a directory with `session.toml` (the [`Manifest`]) and one CSV table
+//! per trial (a [`Trial`], stored as column vectors). [`Session::read`] reads all of it;
+//! [`Session::open`] reads the manifest and gives a [`SessionReader`] that reads trials
+//! one at a time, for sessions too big to hold. Every file that breaks the format is
+//! rejected with a [`SessionError`] that names the file, the line and the field.
+//! [`SessionWriter`] records a session so that a crash at any instant leaves a session
+//! that reads back.
+
+mod error;
+mod manifest;
+mod table;
+mod writer;
+
+use std::path::{Path, PathBuf};
+
+pub use error::SessionError;
+pub use manifest::{
+    Amplitude, Device, FORMAT, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind, Sha256,
+    SimInfo, Source, Subject, TrialEntry, TrialKind,
+};
+pub use table::{Column, OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Trial, time_tolerance_s};
+pub use writer::{Channels, Recovered, Sample, SessionWriter, TrialMeta, recover};
+
+/// The manifest's file name inside a session directory.
+pub const MANIFEST_FILE: &str = "session.toml";
+
+/// A whole session in memory: the manifest and every trial, in manifest order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Session {
+    /// The session directory it was read from.
+    pub dir: PathBuf,
+    /// The manifest.
+    pub manifest: Manifest,
+    /// `trials[i]` is the table of `manifest.trials[i]`.
+    pub trials: Vec<Trial>,
+}
+
+impl Session {
+    /// Reads and checks the whole session in `dir`: the manifest, every listed trial
+    /// file, its digest when the manifest gives one, and each perturbation's onset.
+    /// Files the manifest does not list (such as a trial still being recorded) are
+    /// ignored.
+    ///
+    /// # Errors
+    /// The first fault found, in manifest order, as a [`SessionError`] naming file,
+    /// line and field.
+    pub fn read(dir: impl AsRef<Path>) -> Result<Session, SessionError> {
+        let reader = Session::open(dir)?;
+        let trials = reader
+            .trials()
+            .map(|r| r.map(|(_, t)| t))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Session {
+            dir: reader.dir,
+            manifest: reader.manifest,
+            trials,
+        })
+    }
+
+    /// Reads and checks the manifest in `dir` and that every listed trial file exists;
+    /// trial tables are read on demand.
+    ///
+    /// # Errors
+    /// A [`SessionError`] naming `session.toml`, the line and the key.
+    pub fn open(dir: impl AsRef<Path>) -> Result<SessionReader, SessionError> {
+        let dir = dir.as_ref().to_path_buf();
+        let manifest_path = dir.join(MANIFEST_FILE);
+        let text = std::fs::read_to_string(&manifest_path)
+            .map_err(|e| SessionError::io(&manifest_path, e))?;
+        let (manifest, lines) = manifest::parse(&text, &manifest_path)?;
+        for (entry, at) in manifest.trials.iter().zip(&lines) {
+            let path = entry.path_in(&dir);
+            if !path.is_file() {
+                return Err(SessionError::TrialFileMissing {
+                    file: manifest_path,
+                    line: at.file,
+                    field: "trial.file".into(),
+                    missing: path,
+                });
+            }
+        }
+        Ok(SessionReader {
+            dir,
+            manifest_path,
+            manifest,
+            lines,
+        })
+    }
+
+    /// Each trial's entry with its table, in manifest order.
+    pub fn iter(&self) -> impl Iterator<Item = (&TrialEntry, &Trial)> {
+        self.manifest.trials.iter().zip(&self.trials)
+    }
+
+    /// The trial with id `id`.
+    #[must_use]
+    pub fn trial(&self, id: u32) -> Option<(&TrialEntry, &Trial)> {
+        self.iter().find(|(e, _)| e.id == id)
+    }
+}
+
+/// A session whose manifest is read and checked, with trials read on demand.
+#[derive(Debug, Clone)]
+pub struct SessionReader {
+    dir: PathBuf,
+    manifest_path: PathBuf,
+    manifest: Manifest,
+    lines: Vec<manifest::EntryLines>,
+}
+
+impl SessionReader {
+    /// The manifest.
+    #[must_use]
+    pub fn manifest(&self) -> &Manifest {
+        &self.manifest
+    }
+
+    /// The session directory.
+    #[must_use]
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The manifest, giving up the reader.
+    #[must_use]
+    pub fn into_manifest(self) -> Manifest {
+        self.manifest
+    }
+
+    /// Reads and checks the table of `manifest().trials[index]`; `None` past the end.
+    #[must_use]
+    pub fn read_trial(&self, index: usize) -> Option<Result<Trial, SessionError>> {
+        let entry = self.manifest.trials.get(index)?;
+        let at = self.lines.get(index).cloned().unwrap_or_default();
+        Some(self.read_entry(entry, &at))
+    }
+
+    /// Each trial's entry with its table, read one at a time, in manifest order.
+    pub fn trials(&self) -> impl Iterator<Item = Result<(&TrialEntry, Trial), SessionError>> {
+        self.manifest
+            .trials
+            .iter()
+            .zip(&self.lines)
+            .map(|(e, at)| self.read_entry(e, at).map(|t| (e, t)))
+    }
+
+    fn read_entry(
+        &self,
+        entry: &TrialEntry,
+        at: &manifest::EntryLines,
+    ) -> Result<Trial, SessionError> {
+        let path = entry.path_in(&self.dir);
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Err(SessionError::TrialFileMissing {
+                    file: self.manifest_path.clone(),
+                    line: at.file,
+                    field: "trial.file".into(),
+                    missing: path,
+                });
+            }
+            Err(e) => return Err(SessionError::io(path, e)),
+        };
+        if let Some(expected) = entry.sha256 {
+            let actual = Sha256::of(&bytes);
+            if actual != expected {
+                return Err(SessionError::ShaMismatch {
+                    file: path,
+                    manifest: self.manifest_path.clone(),
+                    line: at.sha256,
+                    expected,
+                    actual,
+                });
+            }
+        }
+        let trial = table::parse_csv(&bytes, self.manifest.rate_hz, &path)?;
+        if let Some(p) = &entry.perturbation {
+            // The onset has the control clock's resolution, so it may fall after the
+            // last row but within its sample period.
+            let end_s = trial.end_s();
+            if !(0.0..end_s + 1.0 / self.manifest.rate_hz).contains(&p.onset_s) {
+                return Err(SessionError::PerturbationOutsideTrial {
+                    file: self.manifest_path.clone(),
+                    line: at.onset,
+                    field: "trial.perturbation.onset_s".into(),
+                    onset_s: p.onset_s,
+                    end_s,
+                });
+            }
+        }
+        Ok(trial)
+    }
+}
