@@ -382,6 +382,7 @@ impl Controller {
     fn stop_law(&mut self) {
         self.abort_perturbations();
         self.held_n = [0.0; 2];
+        self.saturated = [false; 2];
         self.motion_start = None;
     }
 
