@@ -3,8 +3,8 @@
 
 use proptest::prelude::*;
 use rigtwin_device::signal::{
-    EdgeMode, FilterKind, butter, cumulative_trapezoid, filtfilt, gradient, savgol_filter, sosfilt,
-    sosfiltfilt, welch,
+    EdgeMode, FilterKind, butter, cumulative_trapezoid, filtfilt, gradient, savgol_coeffs,
+    savgol_filter, sosfilt, sosfiltfilt, welch,
 };
 
 fn poly_eval(c: &[f64], t: f64) -> f64 {
@@ -183,6 +183,61 @@ fn butter_is_3db_down_at_the_cutoff() {
                 };
                 assert!((sos.gain(pass, fs) - 1.0).abs() <= 1e-9, "{kind:?} {order}");
             }
+        }
+    }
+}
+
+/// Long windows go through FFT correlation: for every edge mode, a 101-tap filter
+/// (above the FFT threshold) equals the direct sum Σ c[k]·x_ext[i + 50 − k] built from
+/// `savgol_coeffs` here, to 1e-12 of the output's scale (FFT rounding is
+/// ~eps·log2(n)·‖x‖·‖c‖, far below that).
+#[test]
+fn fft_path_equals_direct_sum() {
+    let n = 700;
+    let x: Vec<f64> = (0..n)
+        .map(|i| (i as f64 * 0.031).sin() + 0.3 * (i as f64 * 0.17).cos() + 2.0)
+        .collect();
+    let (w, p, d, delta) = (101usize, 4usize, 1usize, 0.01);
+    let half = (w / 2) as isize;
+    let c = savgol_coeffs(w, p, d, delta).unwrap();
+    for mode in [
+        EdgeMode::Nearest,
+        EdgeMode::Mirror,
+        EdgeMode::Wrap,
+        EdgeMode::Constant(-0.5),
+        EdgeMode::Interp,
+    ] {
+        let y = savgol_filter(&x, w, p, d, delta, mode).unwrap();
+        let ext = |i: isize| -> f64 {
+            let m = n as isize;
+            if (0..m).contains(&i) {
+                return x[i as usize];
+            }
+            match mode {
+                EdgeMode::Nearest => x[i.clamp(0, m - 1) as usize],
+                EdgeMode::Wrap => x[i.rem_euclid(m) as usize],
+                EdgeMode::Constant(v) => v,
+                EdgeMode::Mirror => {
+                    let r = i.rem_euclid(2 * (m - 1));
+                    x[(if r < m { r } else { 2 * (m - 1) - r }) as usize]
+                }
+                EdgeMode::Interp => f64::NAN,
+            }
+        };
+        let (lo, hi) = match mode {
+            EdgeMode::Interp => (half as usize, n - half as usize),
+            _ => (0, n),
+        };
+        let scale = y.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        for i in lo..hi {
+            let direct: f64 = (0..w)
+                .map(|k| c[k] * ext(i as isize + half - k as isize))
+                .sum();
+            assert!(
+                (y[i] - direct).abs() <= 1e-12 * scale,
+                "{mode:?} sample {i}: {} vs {direct}",
+                y[i]
+            );
         }
     }
 }
