@@ -25,9 +25,11 @@ pub struct RigConfig {
     /// Positions of the rail end-stops' inner faces, rig frame, m:
     /// `[[x_min, x_max], [y_min, y_max]]` for the handle (cart) position.
     pub rail_limits_m: [[f64; 2]; 2],
-    /// Stiffness of the rubber end-stop bumpers, N/m.
+    /// Stiffness of the rubber end-stop bumpers, N/m. **Assumption** (no data).
     pub end_stop_stiffness_n_per_m: f64,
-    /// Damping of the end-stop bumpers while compressed, N s/m.
+    /// Damping of the end-stop bumpers while compressed, N s/m (2000: damping ratio
+    /// ≈ 0.6 for the x carts and ≈ 1 for the y cart on the default bumper, a rubber stop
+    /// that does not bounce the carts back across the workspace).
     pub end_stop_damping_n_s_per_m: f64,
     /// Encoder quantum, m (1 µm on the Börner rig).
     pub encoder_quantum_m: f64,
@@ -50,7 +52,7 @@ impl Default for RigConfig {
             initial_handle_m: [0.0, -0.125],
             rail_limits_m: [[-0.16, 0.16], [-0.16, 0.16]],
             end_stop_stiffness_n_per_m: 2.0e5,
-            end_stop_damping_n_s_per_m: 400.0,
+            end_stop_damping_n_s_per_m: 2000.0,
             encoder_quantum_m: 1.0e-6,
             force_noise_rms_n: 0.05,
             solver: SolverConfig::default(),

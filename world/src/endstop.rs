@@ -7,7 +7,7 @@
 //! exactly, and so that the rapier step needs no collision detection.
 
 use parry2d_f64::math::{Pose, Vector};
-use parry2d_f64::query::details::contact_cuboid_cuboid;
+use parry2d_f64::query::contact;
 use parry2d_f64::shape::Cuboid;
 
 /// Half-length of the cart block along its rail, m (its size does not change the law).
@@ -80,11 +80,12 @@ impl RailStops {
         let mut total = 0.0;
         for centre in self.stop_centres_m {
             let stop_pose = Pose::from_translation(self.along(centre));
-            let pos12 = cart_pose.inv_mul(&stop_pose);
-            if let Some(c) = contact_cuboid_cuboid(&pos12, &self.cart, &self.stop, 0.0)
+            // parry's generic query (its `contact_cuboid_cuboid` fast path reports zero
+            // depth for 2-D boxes that overlap face to face; the dispatcher is exact here).
+            if let Ok(Some(c)) = contact(&cart_pose, &self.cart, &stop_pose, &self.stop, 0.0)
                 && c.dist < 0.0
             {
-                // normal1 points from the cart into the stop (cart frame = rig axes).
+                // normal1 points from the cart into the stop, world frame.
                 let n = if self.axis == 0 {
                     c.normal1.x
                 } else {

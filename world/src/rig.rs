@@ -543,22 +543,25 @@ impl SimRig {
     }
 
     /// Mass that moves with the handle along x and y when the carts are free and nothing
-    /// is attached: `[m_lower + m_upper + m_handle, m_upper + m_handle]`, kg.
+    /// is attached: `[m_lower + m_upper + m_handle, m_upper + m_handle]`, kg (handle
+    /// including the `handle_mass` effect).
     #[must_use]
     pub fn carried_mass_kg(&self) -> [f64; 2] {
-        let b = &self.world.bodies;
-        let (ml, mu, mh) = (
-            b[self.lower].mass(),
-            b[self.upper].mass(),
-            b[self.handle].mass(),
-        );
-        [ml + mu + mh, mu + mh]
+        let c = &self.cfg;
+        let mh = c.handle_mass_kg + c.effects.handle_mass.map_or(0.0, |h| h.extra_mass_kg);
+        [
+            c.lower_cart_mass_kg + c.upper_cart_mass_kg + mh,
+            c.upper_cart_mass_kg + mh,
+        ]
     }
 
     /// The attached test mass, kg (spring-mass rig only).
     #[must_use]
     pub fn test_mass_kg(&self) -> Option<f64> {
-        self.spring_mass.map(|s| self.world.bodies[s.body].mass())
+        match &self.cfg.attachment {
+            Attachment::SpringMass { mass_kg, .. } => Some(*mass_kg),
+            _ => None,
+        }
     }
 
     /// Encoder counts of the current cart positions: `floor(x / quantum)`, so the count
