@@ -1,0 +1,217 @@
+//! Crash safety: a writer killed (SIGKILL) at any instant leaves a session that reads
+//! back; after `session::recover`, it holds everything pushed except at most the last
+//! 10 ms of samples, and every value is the one that was pushed.
+//!
+//! The writer runs in a child process: this test binary itself, re-run with
+//! `RIGTWIN_CRASH_DIR` set, which makes `child_writer` write instead of returning.
+#![allow(clippy::unwrap_used, clippy::expect_used)]
+
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use rand::{Rng, SeedableRng};
+use rigtwin::session::{
+    self, Channels, Device, Manifest, Sample, Session, SessionWriter, Source, Subject, TrialKind,
+    TrialMeta,
+};
+
+const RATE_HZ: f64 = 1000.0;
+const TRIALS: u32 = 4;
+const ROWS: u64 = 600;
+/// 10 ms of samples at `RATE_HZ`: what a kill may lose.
+const LOSS: u64 = 10;
+
+fn sample(trial: u32, i: u64) -> Sample {
+    let k = f64::from(trial) * 10.0 + i as f64 / 7.0;
+    Sample {
+        pos_m: [k.sin() / 10.0, k.cos() / 10.0],
+        force_n: [k, -k / 3.0],
+        pert_force_n: [0.0, 1.0 / (1.0 + k)],
+        vel_m_per_s: None,
+        ref_m: None,
+        cmd_n: Some([k * 1e-3, -k * 1e-3]),
+    }
+}
+
+fn header() -> Manifest {
+    Manifest {
+        source: Source::Sim,
+        rate_hz: RATE_HZ,
+        created: "2026-11-22T00:00:00Z".into(),
+        device: Device {
+            kind: "admittance".into(),
+            mass_kg: [5.0, 5.0],
+            damping_n_s_per_m: [15.0, 15.0],
+            handle_mass_kg: None,
+            workspace_half_width_m: None,
+        },
+        subject: Subject {
+            id: "crash".into(),
+            shoulder_m: [0.0, -0.425],
+            upper_arm_m: None,
+            forearm_m: None,
+            body_mass_kg: None,
+            extra: Default::default(),
+        },
+        sim: None,
+        trials: Vec::new(),
+    }
+}
+
+/// The child's work; a no-op unless run by `kill_*` below with `RIGTWIN_CRASH_DIR`.
+#[test]
+fn child_writer() {
+    let Some(dir) = std::env::var_os("RIGTWIN_CRASH_DIR") else {
+        return;
+    };
+    let dir = Path::new(&dir);
+    let pause_at: Option<u64> = std::env::var("RIGTWIN_CRASH_PAUSE_AT")
+        .ok()
+        .and_then(|s| s.parse().ok());
+    let mut w = SessionWriter::create(dir.join("s"), header()).unwrap();
+    let mut pushed = 0_u64;
+    let channels = Channels {
+        command: true,
+        ..Channels::default()
+    };
+    for id in 1..=TRIALS {
+        let meta = TrialMeta {
+            id,
+            kind: TrialKind::Reach,
+            start_m: None,
+            goal_m: None,
+            perturbation: None,
+        };
+        w.begin_trial(meta, channels.clone()).unwrap();
+        for i in 0..ROWS {
+            w.push(&sample(id, i)).unwrap();
+            pushed += 1;
+            if Some(pushed) == pause_at {
+                std::fs::write(dir.join("ready"), pushed.to_string()).unwrap();
+                loop {
+                    std::thread::sleep(Duration::from_secs(1));
+                }
+            }
+            if pause_at.is_none() && pushed % 40 == 0 {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+        w.finish_trial().unwrap();
+    }
+    w.finish().unwrap();
+}
+
+fn spawn(dir: &Path, pause_at: Option<u64>) -> std::process::Child {
+    let mut cmd = Command::new(std::env::current_exe().unwrap());
+    cmd.args(["--exact", "child_writer", "--test-threads=1"])
+        .env("RIGTWIN_CRASH_DIR", dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null());
+    if let Some(n) = pause_at {
+        cmd.env("RIGTWIN_CRASH_PAUSE_AT", n.to_string());
+    }
+    cmd.spawn().unwrap()
+}
+
+/// Every trial is a prefix of what was pushed, ids 1, 2, ... in order; returns the
+/// total number of samples.
+fn check_prefix(s: &Session) -> u64 {
+    let mut total = 0;
+    for (k, (e, t)) in s.iter().enumerate() {
+        assert_eq!(e.id, k as u32 + 1);
+        assert!(t.len() as u64 <= ROWS);
+        for i in 0..t.len() {
+            let want = sample(e.id, i as u64);
+            assert_eq!(t.t_s[i], i as f64 / RATE_HZ);
+            assert_eq!(
+                [t.x_m[i], t.y_m[i], t.fx_n[i], t.fy_n[i]],
+                [
+                    want.pos_m[0],
+                    want.pos_m[1],
+                    want.force_n[0],
+                    want.force_n[1]
+                ]
+            );
+            assert_eq!(t.pert_fy_n[i], want.pert_force_n[1]);
+            assert_eq!(t.cmd_fx_n.as_ref().unwrap()[i], want.cmd_n.unwrap()[0]);
+        }
+        total += t.len() as u64;
+    }
+    // Only the last trial may be short.
+    let n = s.trials.len();
+    assert!(
+        s.trials
+            .iter()
+            .take(n.saturating_sub(1))
+            .all(|t| t.len() as u64 == ROWS)
+    );
+    total
+}
+
+#[test]
+fn kill_after_n_samples_loses_at_most_10_ms() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let total = u64::from(TRIALS) * ROWS;
+    let mut points = vec![
+        1,
+        LOSS - 1,
+        LOSS,
+        LOSS + 1,
+        ROWS - 1,
+        ROWS,
+        ROWS + 1,
+        2 * ROWS + 3,
+        total,
+    ];
+    points.extend((0..4).map(|_| rng.random_range(1..=total)));
+    for n in points {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut child = spawn(tmp.path(), Some(n));
+        let start = Instant::now();
+        while !tmp.path().join("ready").exists() {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "child never reached {n} samples"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        child.kill().unwrap();
+        child.wait().unwrap();
+        let dir = tmp.path().join("s");
+
+        // Before recovery: the finished trials read back; the one in progress is absent.
+        let before = Session::read(&dir).unwrap_or_else(|e| panic!("killed at {n}: {e}"));
+        assert_eq!(before.trials.len() as u64, (n - 1) / ROWS, "killed at {n}");
+        check_prefix(&before);
+
+        let recovered = session::recover(&dir).unwrap();
+        let after = Session::read(&dir).unwrap();
+        let kept = check_prefix(&after);
+        assert!(kept <= n && kept + LOSS >= n, "killed at {n}: kept {kept}");
+        assert!(recovered.len() <= 1);
+        // Recovery is idempotent.
+        assert!(session::recover(&dir).unwrap().is_empty());
+        assert_eq!(Session::read(&dir).unwrap(), after);
+    }
+}
+
+#[test]
+fn kill_at_random_instants_always_leaves_a_readable_session() {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    for _ in 0..8 {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut child = spawn(tmp.path(), None);
+        std::thread::sleep(Duration::from_micros(rng.random_range(0..80_000)));
+        child.kill().unwrap();
+        child.wait().unwrap();
+        let dir = tmp.path().join("s");
+        if !dir.join("session.toml").exists() {
+            // Killed before the first manifest was written: nothing was recorded.
+            continue;
+        }
+        check_prefix(&Session::read(&dir).unwrap());
+        session::recover(&dir).unwrap();
+        check_prefix(&Session::read(&dir).unwrap());
+    }
+}
