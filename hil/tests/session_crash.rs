@@ -93,7 +93,7 @@ fn child_writer() {
                     std::thread::sleep(Duration::from_secs(1));
                 }
             }
-            if pause_at.is_none() && pushed % 40 == 0 {
+            if pause_at.is_none() && pushed.is_multiple_of(40) {
                 std::thread::sleep(Duration::from_millis(1));
             }
         }
