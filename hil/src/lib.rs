@@ -1,4 +1,7 @@
 //! rigtwin — the runtime and command line.
 
+pub mod protocol;
+pub mod rehearse;
 pub mod replay;
+pub mod report;
 pub mod session;

@@ -6,7 +6,9 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod estimate;
 pub mod inspect;
+pub mod rehearse;
 
 /// rigtwin: a hardware-in-the-loop co-simulation of a planar haptic manipulandum and
 /// the human arm that holds it.
@@ -16,6 +18,8 @@ pub mod inspect;
 Examples:
   rigtwin inspect ../shared/recordings/example-none
   rigtwin inspect session/ --json
+  rigtwin rehearse hil/protocols/reach-perturb.toml
+  rigtwin estimate ../shared/recordings/example-none
   rigtwin help inspect")]
 pub struct Cli {
     /// What to do.
@@ -28,6 +32,10 @@ pub struct Cli {
 pub enum Command {
     /// Summarise a recorded session: manifest, channels, one line per trial.
     Inspect(inspect::Args),
+    /// Rehearse a protocol against virtual subjects: sessions plus a report.
+    Rehearse(rehearse::Args),
+    /// Estimate impedance from a session's perturbed trials (measured or simulated).
+    Estimate(estimate::Args),
 }
 
 /// Runs the parsed command line.
@@ -37,5 +45,7 @@ pub enum Command {
 pub fn run(cli: &Cli) -> anyhow::Result<()> {
     match &cli.command {
         Command::Inspect(args) => inspect::run(args),
+        Command::Rehearse(args) => rehearse::run(args),
+        Command::Estimate(args) => estimate::run(args),
     }
 }

@@ -1,0 +1,694 @@
+//! Protocols: the TOML file a rehearsal runs, with the controller configuration the rig
+//! itself would run, the plant, the virtual subjects and the estimator settings.
+//!
+//! Three kinds, each with defaults that reproduce a seed's set-up:
+//!
+//! | kind | seed | what |
+//! |---|---|---|
+//! | `reach-perturb` | 000_* | reaches along y with force pulses triggered on a line |
+//! | `hold-sinusoid` | 001_* | force holding while a virtual spring imposes a sinusoid, with position perturbations |
+//! | `calibration-rig` | 001_* App. B | the same perturbations on the spring-mass rig |
+//!
+//! Every table is `deny_unknown_fields`: a misspelt key is an error that names it and
+//! its line. [`Protocol::validate`] names every out-of-range key by its dotted path
+//! (`reach.trials`, `controller.admittance.mass_kg[0]`, `subjects.arm.upper`).
+//! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
+
+mod error;
+pub mod subjects;
+
+use std::path::{Path, PathBuf};
+
+use rigtwin_device::ControllerConfig;
+use rigtwin_device::config::LawKind;
+use rigtwin_world::{PlantEffects, RigConfig, SolverConfig};
+use serde::{Deserialize, Serialize};
+
+pub(crate) use error::Checker;
+pub use error::{InvalidKey, ProtocolError};
+pub use subjects::{SubjectSpread, SubjectsConfig, VirtualSubject};
+
+/// The shipped protocols, by name: (name, file text).
+pub const BUILTIN: [(&str, &str); 3] = [
+    (
+        "reach-perturb",
+        include_str!("../../protocols/reach-perturb.toml"),
+    ),
+    (
+        "hold-sinusoid",
+        include_str!("../../protocols/hold-sinusoid.toml"),
+    ),
+    (
+        "calibration-rig",
+        include_str!("../../protocols/calibration-rig.toml"),
+    ),
+];
+
+/// What a protocol rehearses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ProtocolKind {
+    /// 000_*: point-to-point reaches with force pulses.
+    ReachPerturb,
+    /// 001_*: force holding during an imposed sinusoid, with position perturbations.
+    HoldSinusoid,
+    /// 001_* Appendix B: the position perturbations on the calibrated spring-mass rig.
+    CalibrationRig,
+}
+
+impl ProtocolKind {
+    /// The file spelling.
+    #[must_use]
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ProtocolKind::ReachPerturb => "reach-perturb",
+            ProtocolKind::HoldSinusoid => "hold-sinusoid",
+            ProtocolKind::CalibrationRig => "calibration-rig",
+        }
+    }
+}
+
+/// A whole protocol file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Protocol {
+    /// Short name; the default output folder is `out/<name>-<seed>/`.
+    pub name: String,
+    /// What is rehearsed.
+    pub kind: ProtocolKind,
+    /// Session seed used when the command line gives none.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// How sessions are recorded.
+    #[serde(default)]
+    pub recording: RecordingConfig,
+    /// The reach task and its force-pulse schedule (`kind = "reach-perturb"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reach: Option<ReachConfig>,
+    /// The hold task and its position-perturbation schedule (`hold-sinusoid`,
+    /// `calibration-rig`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold: Option<HoldConfig>,
+    /// The spring-mass rig (`calibration-rig`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<CalibrationConfig>,
+    /// The rig's controller, exactly as the rig runs it (`rigtwin_device`).
+    #[serde(default)]
+    pub controller: ControllerConfig,
+    /// The simulated plant.
+    #[serde(default)]
+    pub plant: PlantConfig,
+    /// The virtual subjects.
+    #[serde(default)]
+    pub subjects: SubjectsConfig,
+    /// Estimator settings for the report.
+    #[serde(default)]
+    pub estimate: EstimateConfig,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// How trials are recorded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RecordingConfig {
+    /// Rate of the trial tables, Hz; must divide 4000. Default 1000: each row is the
+    /// mean of a block of 4 control ticks, `t_s` at the block centre, as the shared
+    /// rig logs (`recordings/README.md`). 4000 records every tick.
+    pub rate_hz: u32,
+    /// Add the simulator's ground-truth columns (`true_x_m`, `true_y_m`,
+    /// `hand_fx_n`, `hand_fy_n`), which readers of the format ignore.
+    pub truth_columns: bool,
+}
+
+impl Default for RecordingConfig {
+    fn default() -> Self {
+        RecordingConfig {
+            rate_hz: 1000,
+            truth_columns: true,
+        }
+    }
+}
+
+/// The reach of 000_* and its force pulses.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReachConfig {
+    /// Movement start, rig frame, m (000_*: 0.30 m from the shoulder = [0, −0.125]).
+    pub start_m: [f64; 2],
+    /// Movement goal, rig frame, m (0.55 m from the shoulder = [0, 0.125]).
+    pub goal_m: [f64; 2],
+    /// Still time before the movement, s.
+    pub still_before_s: f64,
+    /// Movement duration, s (3 s in 000_* section 4.2).
+    pub movement_s: f64,
+    /// Still time after the movement, s.
+    pub still_after_s: f64,
+    /// Movements in the session (100 in 000_* section 5.2).
+    pub trials: u32,
+    /// Pulse directions, degrees from +x toward +y (000_*: never along an axis).
+    pub angles_deg: Vec<f64>,
+    /// Perturbed trials per angle (3 in the experiment: 24 of 100 perturbed).
+    pub repetitions: u32,
+    /// Axis watched by the trigger.
+    pub trigger_axis: rigtwin_device::config::Axis,
+    /// The pulse fires when the measured position on `trigger_axis` crosses this line
+    /// in the direction of the movement, m (−0.025: 0.1 m into the reach, 0.4 m from
+    /// the shoulder).
+    pub trigger_position_m: f64,
+}
+
+impl Default for ReachConfig {
+    fn default() -> Self {
+        ReachConfig {
+            start_m: [0.0, -0.125],
+            goal_m: [0.0, 0.125],
+            still_before_s: 0.25,
+            movement_s: 3.0,
+            still_after_s: 0.25,
+            trials: 100,
+            angles_deg: vec![30.0, 60.0, 120.0, 150.0, 210.0, 240.0, 300.0, 330.0],
+            repetitions: 3,
+            trigger_axis: rigtwin_device::config::Axis::Y,
+            trigger_position_m: -0.025,
+        }
+    }
+}
+
+impl ReachConfig {
+    /// Number of perturbed trials.
+    #[must_use]
+    pub fn perturbed(&self) -> usize {
+        self.angles_deg.len() * self.repetitions as usize
+    }
+
+    /// Trial length, s.
+    #[must_use]
+    pub fn trial_s(&self) -> f64 {
+        self.still_before_s + self.movement_s + self.still_after_s
+    }
+}
+
+/// One condition of 001_*: force direction and motion axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HoldCondition {
+    /// Direction of the force the hand holds, degrees from +x toward +y.
+    pub force_deg: f64,
+    /// Axis of the imposed motion.
+    pub axis: rigtwin_device::config::Axis,
+}
+
+/// The force-holding task of 001_*. The imposed motion itself (amplitude, frequency,
+/// cycles, ramps) is the controller's `controller.imposed_motion`; it starts when the
+/// controller is activated at tick 1 (the raised-cosine ramp stands in for the seed's
+/// 5 s of still holding: the controller must be active to hold the handle at all).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HoldConfig {
+    /// Where the hand holds the handle, rig frame, m (centre of the imposed motion).
+    pub hand_m: [f64; 2],
+    /// Magnitude of the force to hold, N (10 N in 001_*).
+    pub force_n: f64,
+    /// Still time after the motion ends, s.
+    pub after_s: f64,
+    /// The conditions, one trial each, in this order (001_*: all 8).
+    pub conditions: Vec<HoldCondition>,
+    /// Rise of the co-contraction level within a trial, 1/s (0: constant).
+    pub co_contraction_rise_per_s: f64,
+    /// Position perturbations per zero-acceleration slot: every slot gets one
+    /// (001_*: twice a cycle, 50 per trial).
+    pub perturb_every_slot: bool,
+}
+
+impl Default for HoldConfig {
+    fn default() -> Self {
+        use rigtwin_device::config::Axis;
+        let mut conditions = Vec::new();
+        for axis in [Axis::X, Axis::Y] {
+            for force_deg in [0.0, 180.0, 90.0, 270.0] {
+                conditions.push(HoldCondition { force_deg, axis });
+            }
+        }
+        HoldConfig {
+            hand_m: [0.0, 0.0],
+            force_n: 10.0,
+            after_s: 1.0,
+            conditions,
+            co_contraction_rise_per_s: 0.0,
+            perturb_every_slot: true,
+        }
+    }
+}
+
+/// The calibrated spring-mass rig of 001_* Appendix B.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CalibrationConfig {
+    /// Test mass, kg (1.87).
+    pub mass_kg: f64,
+    /// Spring stiffness along x and y, N/m (615, 507).
+    pub stiffness_n_per_m: [f64; 2],
+    /// Repetitions of the task (5 in Appendix B).
+    pub repetitions: u32,
+}
+
+impl Default for CalibrationConfig {
+    fn default() -> Self {
+        CalibrationConfig {
+            mass_kg: 1.87,
+            stiffness_n_per_m: [615.0, 507.0],
+            repetitions: 5,
+        }
+    }
+}
+
+/// The plant: the parts of `rigtwin_world::RigConfig` a protocol may set (the handle's
+/// start and what holds it follow from the task and the subjects).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PlantConfig {
+    /// Lower (x) cart, kg.
+    pub lower_cart_mass_kg: f64,
+    /// Upper (y) cart, kg.
+    pub upper_cart_mass_kg: f64,
+    /// Mass between force sensor and hand, kg.
+    pub handle_mass_kg: f64,
+    /// Rail end-stops, `[[x_min, x_max], [y_min, y_max]]`, m.
+    pub rail_limits_m: [[f64; 2]; 2],
+    /// Encoder quantum, m.
+    pub encoder_quantum_m: f64,
+    /// Force-sensor noise, N RMS per axis at 4 kHz.
+    pub force_noise_rms_n: f64,
+    /// rapier solver settings.
+    pub solver: SolverConfig,
+    /// Non-ideal plant effects (all off by default).
+    pub effects: PlantEffects,
+}
+
+impl Default for PlantConfig {
+    fn default() -> Self {
+        let r = RigConfig::default();
+        PlantConfig {
+            lower_cart_mass_kg: r.lower_cart_mass_kg,
+            upper_cart_mass_kg: r.upper_cart_mass_kg,
+            handle_mass_kg: r.handle_mass_kg,
+            rail_limits_m: r.rail_limits_m,
+            encoder_quantum_m: r.encoder_quantum_m,
+            force_noise_rms_n: r.force_noise_rms_n,
+            solver: r.solver,
+            effects: r.effects,
+        }
+    }
+}
+
+impl PlantConfig {
+    /// The world's configuration with the handle starting at `initial_handle_m` and
+    /// `attachment` holding it.
+    #[must_use]
+    pub fn rig_config(
+        &self,
+        initial_handle_m: [f64; 2],
+        attachment: rigtwin_world::Attachment,
+    ) -> RigConfig {
+        RigConfig {
+            lower_cart_mass_kg: self.lower_cart_mass_kg,
+            upper_cart_mass_kg: self.upper_cart_mass_kg,
+            handle_mass_kg: self.handle_mass_kg,
+            initial_handle_m,
+            rail_limits_m: self.rail_limits_m,
+            encoder_quantum_m: self.encoder_quantum_m,
+            force_noise_rms_n: self.force_noise_rms_n,
+            solver: self.solver,
+            attachment,
+            effects: self.effects.clone(),
+            ..RigConfig::default()
+        }
+    }
+}
+
+/// How the variational signals of the Börner estimator are formed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum EstimateMode {
+    /// As the seed writes it (000_* section 3.1).
+    #[default]
+    Seed,
+    /// The same filter on force and kinematics (see `rigtwin_device::estimate`).
+    Consistent,
+}
+
+/// Estimator settings (000_*: SG 5th order 30 Hz, high-pass 1 Hz 5th order, 150 ms).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EstimateConfig {
+    /// Estimation interval after the onset, s.
+    pub t_est_s: f64,
+    /// Savitzky–Golay cut-off, Hz.
+    pub savgol_cutoff_hz: f64,
+    /// Savitzky–Golay polynomial order.
+    pub savgol_polyorder: usize,
+    /// High-pass cut-off of the jerk, Hz.
+    pub high_pass_hz: f64,
+    /// High-pass Butterworth order.
+    pub high_pass_order: usize,
+    /// How variational signals are formed.
+    pub mode: EstimateMode,
+}
+
+impl Default for EstimateConfig {
+    fn default() -> Self {
+        EstimateConfig {
+            t_est_s: 0.150,
+            savgol_cutoff_hz: 30.0,
+            savgol_polyorder: 5,
+            high_pass_hz: 1.0,
+            high_pass_order: 5,
+            mode: EstimateMode::Seed,
+        }
+    }
+}
+
+impl EstimateConfig {
+    /// The device estimator's settings.
+    #[must_use]
+    pub fn borner(&self) -> rigtwin_device::estimate::BornerConfig {
+        use rigtwin_device::estimate::{BornerConfig, HighPass, VariationalMode};
+        BornerConfig {
+            savgol_polyorder: self.savgol_polyorder,
+            savgol_cutoff_hz: self.savgol_cutoff_hz,
+            high_pass: (self.high_pass_hz > 0.0).then_some(HighPass {
+                cutoff_hz: self.high_pass_hz,
+                order: self.high_pass_order,
+            }),
+            t_est_s: self.t_est_s,
+            mode: match self.mode {
+                EstimateMode::Seed => VariationalMode::Seed,
+                EstimateMode::Consistent => VariationalMode::Consistent,
+            },
+            ..BornerConfig::default()
+        }
+    }
+}
+
+impl Protocol {
+    /// Parses and checks a protocol from TOML text; `path` names it in errors.
+    ///
+    /// # Errors
+    /// [`ProtocolError::Parse`] for bad TOML, unknown keys or wrong types;
+    /// [`ProtocolError::Invalid`] naming every out-of-range key.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Protocol, ProtocolError> {
+        let protocol: Protocol = toml::from_str(text).map_err(|e| ProtocolError::Parse {
+            path: path.to_path_buf(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        protocol
+            .validate()
+            .map_err(|errors| ProtocolError::Invalid {
+                path: path.to_path_buf(),
+                errors,
+            })?;
+        Ok(protocol)
+    }
+
+    /// Reads and checks a protocol file. A path that does not exist but is the name of
+    /// a shipped protocol (`reach-perturb`, `hold-sinusoid`, `calibration-rig`) gives
+    /// the built-in copy.
+    ///
+    /// # Errors
+    /// As [`Protocol::from_toml`]; [`ProtocolError::Read`] if the file cannot be read.
+    pub fn load(path: &Path) -> Result<Protocol, ProtocolError> {
+        if !path.exists()
+            && let Some(p) = path.to_str().and_then(Protocol::builtin_text)
+        {
+            return Protocol::from_toml(p, path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| ProtocolError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Protocol::from_toml(&text, path)
+    }
+
+    fn builtin_text(name: &str) -> Option<&'static str> {
+        BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+    }
+
+    /// A shipped protocol by name.
+    ///
+    /// # Errors
+    /// [`ProtocolError::Read`] for an unknown name; otherwise as [`Protocol::from_toml`].
+    pub fn builtin(name: &str) -> Result<Protocol, ProtocolError> {
+        let path = PathBuf::from(format!("<built-in {name}>"));
+        match Protocol::builtin_text(name) {
+            Some(text) => Protocol::from_toml(text, &path),
+            None => Err(ProtocolError::Read {
+                path,
+                source: std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no built-in protocol of that name",
+                ),
+            }),
+        }
+    }
+
+    /// The reach section, with its defaults when absent.
+    #[must_use]
+    pub fn reach(&self) -> ReachConfig {
+        self.reach.clone().unwrap_or_default()
+    }
+
+    /// The hold section, with its defaults when absent.
+    #[must_use]
+    pub fn hold(&self) -> HoldConfig {
+        self.hold.clone().unwrap_or_default()
+    }
+
+    /// The calibration section, with its defaults when absent.
+    #[must_use]
+    pub fn calibration(&self) -> CalibrationConfig {
+        self.calibration.clone().unwrap_or_default()
+    }
+
+    /// Number of trials per subject.
+    #[must_use]
+    pub fn trials_per_subject(&self) -> usize {
+        match self.kind {
+            ProtocolKind::ReachPerturb => self.reach().trials as usize,
+            ProtocolKind::HoldSinusoid => self.hold().conditions.len(),
+            ProtocolKind::CalibrationRig => self.calibration().repetitions as usize,
+        }
+    }
+
+    /// Checks every key.
+    ///
+    /// # Errors
+    /// Every invalid key, by dotted path.
+    pub fn validate(&self) -> Result<(), Vec<InvalidKey>> {
+        let mut c = Checker::default();
+        if self.name.trim().is_empty()
+            || !self
+                .name
+                .chars()
+                .all(|ch| ch.is_ascii_alphanumeric() || ch == '-' || ch == '_')
+        {
+            c.fail(
+                "name",
+                format!(
+                    "must be a non-empty folder-safe name (letters, digits, - and _), got {:?}",
+                    self.name
+                ),
+            );
+        }
+        let rate = self.recording.rate_hz;
+        if rate == 0 || !crate::rehearse::TICK_HZ.is_multiple_of(u64::from(rate)) {
+            c.fail(
+                "recording.rate_hz",
+                format!("must divide the 4000 Hz control clock, got {rate}"),
+            );
+        }
+        if let Err(e) = self.controller.validate() {
+            for k in e.errors {
+                c.fail(format!("controller.{}", k.key), k.problem);
+            }
+        }
+        if self.controller.control_rate_hz != 4000 {
+            c.fail(
+                "controller.control_rate_hz",
+                format!(
+                    "must be 4000: the simulator steps at 4 kHz, got {}",
+                    self.controller.control_rate_hz
+                ),
+            );
+        }
+        let wall = self.controller.safety.wall_m;
+        let unused = |c: &mut Checker, key: &str| {
+            c.fail(
+                key,
+                format!(
+                    "is not used by kind = \"{}\"; remove it",
+                    self.kind.as_str()
+                ),
+            );
+        };
+        match self.kind {
+            ProtocolKind::ReachPerturb => {
+                if self.hold.is_some() {
+                    unused(&mut c, "hold");
+                }
+                if self.calibration.is_some() {
+                    unused(&mut c, "calibration");
+                }
+                if self.controller.law != LawKind::Admittance {
+                    c.fail("controller.law", "must be \"admittance\" for reach-perturb");
+                }
+                self.check_reach(&mut c, wall);
+            }
+            ProtocolKind::HoldSinusoid | ProtocolKind::CalibrationRig => {
+                if self.reach.is_some() {
+                    unused(&mut c, "reach");
+                }
+                if self.kind == ProtocolKind::HoldSinusoid && self.calibration.is_some() {
+                    unused(&mut c, "calibration");
+                }
+                if self.controller.law != LawKind::VirtualSpring {
+                    c.fail(
+                        "controller.law",
+                        format!("must be \"virtual-spring\" for {}", self.kind.as_str()),
+                    );
+                }
+                self.check_hold(&mut c, wall);
+            }
+        }
+        self.check_plant(&mut c);
+        self.subjects.check(&mut c);
+        let e = &self.estimate;
+        c.positive("estimate.t_est_s", e.t_est_s);
+        c.positive("estimate.savgol_cutoff_hz", e.savgol_cutoff_hz);
+        c.non_negative("estimate.high_pass_hz", e.high_pass_hz);
+        if e.savgol_polyorder < 3 {
+            c.fail(
+                "estimate.savgol_polyorder",
+                format!("must be >= 3 (jerk), got {}", e.savgol_polyorder),
+            );
+        }
+        if e.high_pass_hz > 0.0 && e.high_pass_order == 0 {
+            c.fail("estimate.high_pass_order", "must be > 0");
+        }
+        if c.errors.is_empty() {
+            Ok(())
+        } else {
+            Err(c.errors)
+        }
+    }
+
+    fn check_reach(&self, c: &mut Checker, wall: f64) {
+        let r = self.reach();
+        for i in 0..2 {
+            c.inside(&format!("reach.start_m[{i}]"), r.start_m[i], wall);
+            c.inside(&format!("reach.goal_m[{i}]"), r.goal_m[i], wall);
+        }
+        for (key, v) in [
+            ("reach.still_before_s", r.still_before_s),
+            ("reach.still_after_s", r.still_after_s),
+        ] {
+            c.non_negative(key, v);
+            c.whole_ticks(key, v);
+        }
+        c.positive("reach.movement_s", r.movement_s);
+        c.whole_ticks("reach.movement_s", r.movement_s);
+        if r.trials == 0 {
+            c.fail("reach.trials", "must be > 0, got 0");
+        }
+        for (i, a) in r.angles_deg.iter().enumerate() {
+            c.finite(&format!("reach.angles_deg[{i}]"), *a);
+        }
+        if r.perturbed() > r.trials as usize {
+            c.fail(
+                "reach.repetitions",
+                format!(
+                    "{} angles x {} repetitions = {} perturbed trials exceed reach.trials = {}",
+                    r.angles_deg.len(),
+                    r.repetitions,
+                    r.perturbed(),
+                    r.trials
+                ),
+            );
+        }
+        let axis = r.trigger_axis.index();
+        let (a, b) = (r.start_m[axis], r.goal_m[axis]);
+        let line = r.trigger_position_m;
+        if c.finite("reach.trigger_position_m", line)
+            && r.perturbed() > 0
+            && !(a.min(b) < line && line < a.max(b))
+        {
+            c.fail(
+                "reach.trigger_position_m",
+                format!("must lie strictly between start ({a}) and goal ({b}) on the trigger axis, got {line}"),
+            );
+        }
+        let dist =
+            ((r.goal_m[0] - r.start_m[0]).powi(2) + (r.goal_m[1] - r.start_m[1]).powi(2)).sqrt();
+        if dist.is_finite() && dist < 1e-3 {
+            c.fail("reach.goal_m", "must be at least 1 mm from reach.start_m");
+        }
+    }
+
+    fn check_hold(&self, c: &mut Checker, wall: f64) {
+        let h = self.hold();
+        for i in 0..2 {
+            c.inside(&format!("hold.hand_m[{i}]"), h.hand_m[i], wall);
+        }
+        c.non_negative("hold.force_n", h.force_n);
+        c.non_negative("hold.after_s", h.after_s);
+        c.whole_ticks("hold.after_s", h.after_s);
+        if self.kind == ProtocolKind::HoldSinusoid && h.conditions.is_empty() {
+            c.fail("hold.conditions", "must list at least one condition");
+        }
+        for (i, cond) in h.conditions.iter().enumerate() {
+            c.finite(&format!("hold.conditions[{i}].force_deg"), cond.force_deg);
+        }
+        c.finite(
+            "hold.co_contraction_rise_per_s",
+            h.co_contraction_rise_per_s,
+        );
+        let amp = self.controller.imposed_motion.amplitude_m;
+        for i in 0..2 {
+            if h.hand_m[i].is_finite() && amp.is_finite() && h.hand_m[i].abs() + amp >= wall {
+                c.fail(
+                    "controller.imposed_motion.amplitude_m",
+                    format!(
+                        "hold.hand_m[{i}] = {} plus the amplitude {amp} m reaches the wall at {wall} m",
+                        h.hand_m[i]
+                    ),
+                );
+                break;
+            }
+        }
+        if self.kind == ProtocolKind::CalibrationRig {
+            let k = self.calibration();
+            c.positive("calibration.mass_kg", k.mass_kg);
+            c.positive("calibration.stiffness_n_per_m[0]", k.stiffness_n_per_m[0]);
+            c.positive("calibration.stiffness_n_per_m[1]", k.stiffness_n_per_m[1]);
+            if k.repetitions == 0 {
+                c.fail("calibration.repetitions", "must be > 0, got 0");
+            }
+        }
+    }
+
+    fn check_plant(&self, c: &mut Checker) {
+        let cfg = self
+            .plant
+            .rig_config([0.0, 0.0], rigtwin_world::Attachment::None);
+        if let Err(e) = cfg.validate() {
+            match e {
+                rigtwin_world::WorldError::InvalidConfig { key, reason } => {
+                    c.fail(format!("plant.{key}"), reason);
+                }
+                other => c.fail("plant", other.to_string()),
+            }
+        }
+    }
+}

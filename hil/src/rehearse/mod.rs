@@ -1,0 +1,612 @@
+//! Protocol rehearsal: run a protocol against virtual subjects in lock step, faster
+//! than real time, and record one session per subject.
+//!
+//! Determinism: every trial is simulated independently from seeds derived from
+//! (session seed, subject, trial) ([`seed`]); worker threads pick trials up in any
+//! order, and the main thread writes them in trial order through the crash-safe
+//! [`SessionWriter`] as soon as each next one is ready. The same protocol and seed
+//! therefore give byte-identical sessions whatever `--jobs` is. The manifest's
+//! `created` is fixed ([`CREATED`]) for the same reason; wall-clock times go to the
+//! report only.
+//!
+//! Layout of a rehearsal folder:
+//!
+//! ```text
+//! <out>/report.md, report.json      the rehearsal report (all subjects)
+//! <out>/S01/session.toml, trials/   subject 1's session (recording format v1)
+//! <out>/S02/...
+//! ```
+
+pub mod record;
+pub mod seed;
+pub mod trial;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+use std::time::Instant;
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use rigtwin_device::config::LawKind;
+
+use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
+use crate::session::{
+    Amplitude, Device, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind, SessionError,
+    SessionWriter, SimInfo, Source, Subject, Trial, TrialKind, TrialMeta,
+};
+use record::{Block, Layout, ch};
+pub use trial::{Extremes, OnsetTruth, TrialPlan, TrialTask};
+
+/// The control clock of the simulator, Hz (000_* section 5.1).
+pub const TICK_HZ: u64 = 4000;
+
+/// The `created` stamp of simulated sessions: fixed, so that a session's bytes depend on
+/// the protocol and the seed only.
+pub const CREATED: &str = "1970-01-01T00:00:00Z";
+
+/// Why a rehearsal failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RehearseError {
+    /// The controller refused its configuration.
+    #[error("controller: {0}")]
+    Controller(#[from] rigtwin_device::ConfigError),
+    /// A lifecycle transition was refused.
+    #[error("controller lifecycle: {0}")]
+    Lifecycle(#[from] rigtwin_device::LifecycleError),
+    /// A perturbation could not be armed.
+    #[error("perturbation: {0}")]
+    Perturbation(#[from] rigtwin_device::perturb::ArmError),
+    /// The arm model refused its parameters or task.
+    #[error("arm: {0}")]
+    Arm(#[from] rigtwin_arm::ArmError),
+    /// The plant refused its configuration or diverged.
+    #[error("plant: {0}")]
+    World(#[from] rigtwin_world::WorldError),
+    /// Writing the session failed.
+    #[error("session: {0}")]
+    Session(#[from] SessionError),
+    /// The output folder exists and is not empty.
+    #[error("output folder {0} already exists and is not empty; choose another --out")]
+    OutputExists(PathBuf),
+    /// An I/O error outside the session writer.
+    #[error("{path}: {source}")]
+    Io {
+        /// The path.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// The run was cancelled.
+    #[error("cancelled")]
+    Cancelled,
+}
+
+/// How to run a rehearsal.
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Number of virtual subjects.
+    pub subjects: u32,
+    /// Session seed.
+    pub seed: u64,
+    /// Output folder (must not exist or be empty).
+    pub out_dir: PathBuf,
+    /// Worker threads.
+    pub jobs: usize,
+    /// Run at most this many trials per subject (the first ones of the schedule), for
+    /// quick checks; `None` runs the protocol as written.
+    pub max_trials: Option<usize>,
+}
+
+/// Progress, reported after every written trial.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Trials written so far (all subjects).
+    pub done: usize,
+    /// Trials in the rehearsal.
+    pub total: usize,
+    /// Simulated time so far, s.
+    pub simulated_s: f64,
+}
+
+/// Variational truth of one perturbed reach, from its unperturbed twin, per row from
+/// the onset row over the estimation window.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TwinTruth {
+    /// Row of the onset in the table.
+    pub onset_index: usize,
+    /// `Δx`, m.
+    pub dx_m: Vec<[f64; 2]>,
+    /// `Δẋ`, m/s.
+    pub dv_m_per_s: Vec<[f64; 2]>,
+    /// `Δẍ`, m/s².
+    pub da_m_per_s2: Vec<[f64; 2]>,
+    /// `Δu_ext`: the change of the force on the arm from the handle, N.
+    pub du_ext_n: Vec<[f64; 2]>,
+}
+
+/// One position perturbation of a hold trial.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Push {
+    /// Onset on the table clock, s.
+    pub onset_s: f64,
+    /// Direction, degrees.
+    pub angle_deg: f64,
+    /// Largest |x − anchor| within the estimation window per axis, m.
+    pub deviation_m: [f64; 2],
+}
+
+/// The outcome of one trial.
+#[derive(Debug, Clone)]
+pub struct TrialResult {
+    /// Trial id (1-based).
+    pub id: u32,
+    /// What was done.
+    pub task: TrialTask,
+    /// Trial length, s.
+    pub duration_s: f64,
+    /// SHA-256 of the written table.
+    pub sha256: String,
+    /// Extremes over all ticks.
+    pub extremes: Extremes,
+    /// Force-pulse onset on the table clock, s.
+    pub onset_s: Option<f64>,
+    /// Ground truth at the onset.
+    pub onset_truth: Option<OnsetTruth>,
+    /// Largest |Δx| per axis within the estimation window, from the twin, m.
+    pub deviation_m: Option<[f64; 2]>,
+    /// Variational truth from the twin.
+    pub twin: Option<TwinTruth>,
+    /// Position perturbations (hold kinds).
+    pub pushes: Vec<Push>,
+    /// The table as written, kept for perturbed trials (the estimators read it).
+    pub table: Option<Trial>,
+}
+
+/// One subject's session.
+#[derive(Debug, Clone)]
+pub struct SubjectResult {
+    /// The subject.
+    pub subject: VirtualSubject,
+    /// Its session folder.
+    pub dir: PathBuf,
+    /// Its trials in order.
+    pub trials: Vec<TrialResult>,
+}
+
+/// A finished rehearsal.
+#[derive(Debug, Clone)]
+pub struct Rehearsal {
+    /// The protocol run.
+    pub protocol: Protocol,
+    /// The session seed.
+    pub seed: u64,
+    /// The rehearsal folder.
+    pub out_dir: PathBuf,
+    /// Per subject.
+    pub subjects: Vec<SubjectResult>,
+    /// Simulated time, s (twins included).
+    pub simulated_s: f64,
+    /// Wall-clock time, s.
+    pub wall_s: f64,
+    /// Worker threads used.
+    pub jobs: usize,
+}
+
+/// The trials of one subject, in session order. Reach: `angles × repetitions`
+/// perturbed trials at random places among `trials`, angles in random order (000_*
+/// section 5.2), from the subject's schedule stream.
+#[must_use]
+pub fn schedule(protocol: &Protocol, session_seed: u64, subject: u32) -> Vec<TrialPlan> {
+    let plans: Vec<TrialTask> = match protocol.kind {
+        ProtocolKind::ReachPerturb => {
+            let r = protocol.reach();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed::schedule_seed(session_seed, subject));
+            let mut angles: Vec<Option<f64>> = vec![None; r.trials as usize];
+            let mut k = 0;
+            for _ in 0..r.repetitions {
+                for a in &r.angles_deg {
+                    if let Some(slot) = angles.get_mut(k) {
+                        *slot = Some(*a);
+                    }
+                    k += 1;
+                }
+            }
+            angles.shuffle(&mut rng);
+            angles
+                .into_iter()
+                .map(|angle_deg| TrialTask::Reach { angle_deg })
+                .collect()
+        }
+        ProtocolKind::HoldSinusoid => protocol
+            .hold()
+            .conditions
+            .iter()
+            .map(|c| TrialTask::Hold { condition: *c })
+            .collect(),
+        ProtocolKind::CalibrationRig => (0..protocol.calibration().repetitions)
+            .map(|_| TrialTask::Calibration)
+            .collect(),
+    };
+    plans
+        .into_iter()
+        .enumerate()
+        .map(|(i, task)| TrialPlan {
+            index: u32::try_from(i).unwrap_or(u32::MAX),
+            task,
+        })
+        .collect()
+}
+
+/// A fresh folder `base/<name>-<seed>`, or `...-2`, `...-3` if taken.
+#[must_use]
+pub fn fresh_dir(base: &Path, name: &str, seed: u64) -> PathBuf {
+    let first = base.join(format!("{name}-{seed}"));
+    if !first.exists() {
+        return first;
+    }
+    (2..)
+        .map(|k| base.join(format!("{name}-{seed}-{k}")))
+        .find(|p| !p.exists())
+        .unwrap_or(first)
+}
+
+fn manifest(protocol: &Protocol, subject: &VirtualSubject, session_seed: u64) -> Manifest {
+    let c = &protocol.controller;
+    let (kind, mass, damping) = match c.law {
+        LawKind::Admittance => (
+            "admittance",
+            c.admittance.mass_kg,
+            c.admittance.damping_n_s_per_m,
+        ),
+        LawKind::VirtualSpring => (
+            "virtual-spring",
+            c.virtual_spring.mass_kg,
+            c.virtual_spring.damping_n_s_per_m,
+        ),
+    };
+    let mut extra = BTreeMap::new();
+    let f = subject.factors;
+    for (name, v) in [
+        ("factor_muscle_stiffness", f[0]),
+        ("factor_co_contraction", f[1]),
+        ("factor_upper_arm", f[2]),
+        ("factor_forearm", f[3]),
+        ("factor_feedback_gain", f[4]),
+    ] {
+        extra.insert(name.to_owned(), toml::Value::Float(v));
+    }
+    let calibration = protocol.kind == ProtocolKind::CalibrationRig;
+    Manifest {
+        source: Source::Sim,
+        rate_hz: f64::from(protocol.recording.rate_hz),
+        created: CREATED.to_owned(),
+        device: Device {
+            kind: kind.to_owned(),
+            mass_kg: mass,
+            damping_n_s_per_m: damping,
+            handle_mass_kg: Some(protocol.plant.handle_mass_kg),
+            workspace_half_width_m: Some(c.safety.wall_m),
+        },
+        subject: Subject {
+            id: if calibration {
+                "spring-mass".to_owned()
+            } else {
+                subject.id.clone()
+            },
+            shoulder_m: subject.shoulder_m,
+            upper_arm_m: (!calibration).then_some(subject.arm.upper.length_m),
+            forearm_m: (!calibration).then_some(subject.arm.fore.length_m),
+            body_mass_kg: None,
+            extra: if calibration { BTreeMap::new() } else { extra },
+        },
+        sim: Some(SimInfo {
+            seed: Some(session_seed),
+            protocol: Some(protocol.name.clone()),
+            model: Some(if calibration {
+                "spring-mass rig (001_* Appendix B)".to_owned()
+            } else {
+                "rigtwin_arm six-muscle arm".to_owned()
+            }),
+            extra: BTreeMap::new(),
+        }),
+        trials: Vec::new(),
+    }
+}
+
+/// What a worker hands back: the table to write plus the result.
+struct Done {
+    meta: TrialMeta,
+    table: Trial,
+    result: TrialResult,
+    simulated_s: f64,
+}
+
+fn run_trial(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plan: &TrialPlan,
+) -> Result<Done, RehearseError> {
+    let rate = f64::from(protocol.recording.rate_hz);
+    let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
+    let sim = trial::simulate(protocol, subject, session_seed, plan, true)?;
+    let n_ticks = trial::trial_ticks(protocol);
+    let mut simulated_s = n_ticks as f64 / TICK_HZ as f64;
+    let layout = Layout {
+        truth: protocol.recording.truth_columns,
+        position_perturbation: protocol.kind != ProtocolKind::ReachPerturb,
+    };
+    let table = record::to_trial(&sim.rows, rate, layout);
+    let t_est = protocol.estimate.t_est_s;
+    let n_est = (t_est * rate).round() as usize + 1;
+    let onset_s = sim.pulse_onset.map(|k| record::tick_time_s(k, div));
+    let mut twin = None;
+    let mut deviation = None;
+    if let (Some(t0), TrialTask::Reach { angle_deg: Some(_) }) = (onset_s, &plan.task) {
+        let base = trial::simulate(protocol, subject, session_seed, plan, false)?;
+        simulated_s += n_ticks as f64 / TICK_HZ as f64;
+        let i0 = (t0 * rate).round().max(0.0) as usize;
+        let tw = twin_truth(&sim.rows, &base.rows, i0, n_est, rate, &protocol.estimate);
+        let mut dev = [0.0_f64; 2];
+        for d in &tw.dx_m {
+            dev[0] = dev[0].max(d[0].abs());
+            dev[1] = dev[1].max(d[1].abs());
+        }
+        deviation = Some(dev);
+        twin = Some(tw);
+    }
+    let pushes = sim
+        .push_onsets
+        .iter()
+        .map(|&(k, angle_deg)| {
+            let t = record::tick_time_s(k, div);
+            let i0 = (t * rate).round().max(0.0) as usize;
+            let mut dev = [0.0_f64; 2];
+            for b in sim.rows.iter().skip(i0).take(n_est) {
+                for (a, d) in dev.iter_mut().enumerate() {
+                    *d = d.max((b.v[ch::X + a] - b.v[ch::ANCHOR + a]).abs());
+                }
+            }
+            Push {
+                onset_s: t,
+                angle_deg,
+                deviation_m: dev,
+            }
+        })
+        .collect();
+    let (kind, start_m, goal_m) = match &plan.task {
+        TrialTask::Reach { .. } => {
+            let r = protocol.reach();
+            (TrialKind::Reach, Some(r.start_m), Some(r.goal_m))
+        }
+        TrialTask::Hold { .. } => (TrialKind::Hold, Some(protocol.hold().hand_m), None),
+        TrialTask::Calibration => (
+            TrialKind::Other("calibration".to_owned()),
+            Some(protocol.hold().hand_m),
+            None,
+        ),
+    };
+    let perturbation = match (&plan.task, onset_s) {
+        (TrialTask::Reach { angle_deg: Some(a) }, Some(t)) => Some(Perturbation {
+            kind: PerturbationKind::ForcePulse,
+            onset_s: t,
+            duration_s: protocol.controller.force_pulse.duration_s,
+            amplitude: Amplitude::ForceN(protocol.controller.force_pulse.amplitude_n),
+            angle_deg: *a,
+        }),
+        _ => None,
+    };
+    let meta = TrialMeta {
+        id: plan.index + 1,
+        kind,
+        start_m,
+        goal_m,
+        perturbation,
+    };
+    let keep = onset_s.is_some() || !sim.push_onsets.is_empty();
+    let result = TrialResult {
+        id: plan.index + 1,
+        task: plan.task.clone(),
+        duration_s: n_ticks as f64 / TICK_HZ as f64,
+        sha256: String::new(),
+        extremes: sim.extremes,
+        onset_s,
+        onset_truth: sim.onset_truth,
+        deviation_m: deviation,
+        twin,
+        pushes,
+        table: keep.then(|| table.clone()),
+    };
+    Ok(Done {
+        meta,
+        table,
+        result,
+        simulated_s,
+    })
+}
+
+/// The variational truth `perturbed − twin`, filtered as 000_* filters its simulated
+/// signals before comparing (section 4.2: "the simulated signals are filtered using a
+/// fifth order Savitzky-Golay filter with a cut-off frequency of 30 Hz"): `Δx`, `Δẋ`,
+/// `Δẍ` are the SG fit of the true handle position difference and its derivatives,
+/// `Δu_ext` the SG fit of minus the difference of the true hand force on the handle.
+/// Without an SG window for the rate, the raw block means are used.
+fn twin_truth(
+    pert: &[Block],
+    base: &[Block],
+    i0: usize,
+    n: usize,
+    rate_hz: f64,
+    est: &crate::protocol::EstimateConfig,
+) -> TwinTruth {
+    use rigtwin_device::signal::{EdgeMode, savgol_filter, savgol_window_for_cutoff};
+    let len = pert.len().min(base.len());
+    let diff = |c: usize| -> Vec<f64> { (0..len).map(|i| pert[i].v[c] - base[i].v[c]).collect() };
+    let window = savgol_window_for_cutoff(est.savgol_polyorder, est.savgol_cutoff_hz, rate_hz).ok();
+    let sg = |y: &[f64], deriv: usize| -> Option<Vec<f64>> {
+        let w = window?;
+        savgol_filter(
+            y,
+            w,
+            est.savgol_polyorder,
+            deriv,
+            1.0 / rate_hz,
+            EdgeMode::Interp,
+        )
+        .ok()
+    };
+    let mut axes: [[Vec<f64>; 4]; 2] = Default::default();
+    for (a, out) in axes.iter_mut().enumerate() {
+        let x = diff(ch::TRUE_X + a);
+        let h: Vec<f64> = diff(ch::HAND + a).iter().map(|v| -v).collect();
+        *out = match (sg(&x, 0), sg(&x, 1), sg(&x, 2), sg(&h, 0)) {
+            (Some(p), Some(v), Some(acc), Some(f)) => [p, v, acc, f],
+            _ => [x, diff(ch::TRUE_V + a), diff(ch::ACC + a), h],
+        };
+    }
+    let pick = |k: usize| -> Vec<[f64; 2]> {
+        (i0..(i0 + n).min(len))
+            .map(|i| [axes[0][k][i], axes[1][k][i]])
+            .collect()
+    };
+    TwinTruth {
+        onset_index: i0,
+        dx_m: pick(0),
+        dv_m_per_s: pick(1),
+        da_m_per_s2: pick(2),
+        du_ext_n: pick(3),
+    }
+}
+
+fn prepare_out(dir: &Path) -> Result<(), RehearseError> {
+    let io = |source| RehearseError::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    if dir.exists() {
+        let mut entries = std::fs::read_dir(dir).map_err(io)?;
+        if entries.next().is_some() {
+            return Err(RehearseError::OutputExists(dir.to_path_buf()));
+        }
+    }
+    std::fs::create_dir_all(dir).map_err(io)
+}
+
+/// Runs the rehearsal and writes its sessions (not the report: see
+/// [`crate::report`]). `progress` is called after every written trial; `cancel` stops
+/// the run between trials when set.
+///
+/// # Errors
+/// [`RehearseError`] from the output folder, the models or the writer.
+pub fn rehearse(
+    protocol: &Protocol,
+    options: &Options,
+    progress: &(dyn Fn(Progress) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Rehearsal, RehearseError> {
+    let started = Instant::now();
+    prepare_out(&options.out_dir)?;
+    let jobs = options.jobs.max(1);
+    let subjects: Vec<VirtualSubject> = (1..=options.subjects.max(1))
+        .map(|i| protocol.subjects.draw(options.seed, i))
+        .collect();
+    let plans: Vec<Vec<TrialPlan>> = subjects
+        .iter()
+        .map(|s| {
+            let mut p = schedule(protocol, options.seed, s.index);
+            if let Some(m) = options.max_trials {
+                p.truncate(m);
+            }
+            p
+        })
+        .collect();
+    let total: usize = plans.iter().map(Vec::len).sum();
+    let mut done = 0;
+    let mut simulated_s = 0.0;
+    let mut out = Vec::with_capacity(subjects.len());
+    for (subject, plans) in subjects.iter().zip(&plans) {
+        let dir = options.out_dir.join(&subject.id);
+        let mut writer = SessionWriter::create(&dir, manifest(protocol, subject, options.seed))?;
+        let mut results = Vec::with_capacity(plans.len());
+        let next = AtomicUsize::new(0);
+        let (tx, rx) = mpsc::channel::<(usize, Result<Done, RehearseError>)>();
+        let outcome: Result<(), RehearseError> = std::thread::scope(|scope| {
+            for _ in 0..jobs.min(plans.len()).max(1) {
+                let tx = tx.clone();
+                let next = &next;
+                scope.spawn(move || {
+                    loop {
+                        let i = next.fetch_add(1, Ordering::SeqCst);
+                        if i >= plans.len() || cancel.load(Ordering::SeqCst) {
+                            break;
+                        }
+                        let r = run_trial(protocol, subject, options.seed, &plans[i]);
+                        if tx.send((i, r)).is_err() {
+                            break;
+                        }
+                    }
+                });
+            }
+            drop(tx);
+            let mut pending: BTreeMap<usize, Done> = BTreeMap::new();
+            let mut want = 0;
+            for (i, r) in rx.iter() {
+                match r {
+                    Ok(d) => {
+                        pending.insert(i, d);
+                    }
+                    Err(e) => {
+                        cancel.store(true, Ordering::SeqCst);
+                        return Err(e);
+                    }
+                }
+                while let Some(d) = pending.remove(&want) {
+                    let Done {
+                        meta,
+                        table,
+                        mut result,
+                        simulated_s: s,
+                    } = d;
+                    let entry = writer.write_trial(meta, &table)?;
+                    result.sha256 = entry.sha256.map(|h| h.to_string()).unwrap_or_default();
+                    results.push(result);
+                    want += 1;
+                    done += 1;
+                    simulated_s += s;
+                    progress(Progress {
+                        done,
+                        total,
+                        simulated_s,
+                    });
+                }
+            }
+            if want < plans.len() {
+                return Err(RehearseError::Cancelled);
+            }
+            Ok(())
+        });
+        outcome?;
+        writer.finish()?;
+        out.push(SubjectResult {
+            subject: subject.clone(),
+            dir,
+            trials: results,
+        });
+    }
+    Ok(Rehearsal {
+        protocol: protocol.clone(),
+        seed: options.seed,
+        out_dir: options.out_dir.clone(),
+        subjects: out,
+        simulated_s,
+        wall_s: started.elapsed().as_secs_f64(),
+        jobs,
+    })
+}
+
+/// Format version written (for the report).
+pub const SESSION_FORMAT_VERSION: i64 = FORMAT_VERSION;

@@ -1,0 +1,207 @@
+//! Recording: block means of the 4 kHz ticks at the recording rate, and the session
+//! table they become.
+//!
+//! Like the shared rig (`recordings/README.md`), each row is the mean of a block of
+//! `4000 / rate_hz` consecutive ticks; `t_s` is the time of the block's centre with
+//! the clock starting at the centre of the first block, so a tick `k` is at
+//! `t = (k − (d − 1)/2) / 4000` s for blocks of `d` ticks. At 4 kHz (`d = 1`) the rows
+//! are the ticks themselves. Values are rounded before writing to what the sensors
+//! resolve (0.1 µm, 0.1 mN, 1 µm/s, 1 mN of command) so that files stay small and
+//! their text is short; the simulator's ground-truth columns get the same rounding.
+
+use rigtwin_device::TickReport;
+
+use crate::session::{Column, Trial};
+
+/// Number of channels in a [`Block`].
+pub const CHANNELS: usize = 24;
+
+/// Channel indices into [`Block::v`].
+pub mod ch {
+    /// Encoder position x, y, m.
+    pub const X: usize = 0;
+    /// Calibrated hand force x, y, N.
+    pub const F: usize = 2;
+    /// Force-pulse perturbation x, y, N.
+    pub const PERT: usize = 4;
+    /// Drive velocity x, y, m/s.
+    pub const V: usize = 6;
+    /// Position reference x, y, m.
+    pub const REF: usize = 8;
+    /// Motor command x, y, N.
+    pub const CMD: usize = 10;
+    /// True handle position x, y, m.
+    pub const TRUE_X: usize = 12;
+    /// True handle velocity x, y, m/s.
+    pub const TRUE_V: usize = 14;
+    /// True force of the hand on the handle x, y, N.
+    pub const HAND: usize = 16;
+    /// True handle acceleration x, y, m/s².
+    pub const ACC: usize = 18;
+    /// Position-perturbation offset x, y, m.
+    pub const PERT_POS: usize = 20;
+    /// Virtual-spring anchor (imposed motion) x, y, m.
+    pub const ANCHOR: usize = 22;
+}
+
+/// One recorded row: the mean of each channel over its block of ticks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Block {
+    /// Channel means, indexed by [`ch`].
+    pub v: [f64; CHANNELS],
+}
+
+impl Block {
+    /// The pair of a channel.
+    #[must_use]
+    pub fn pair(&self, c: usize) -> [f64; 2] {
+        [self.v[c], self.v[c + 1]]
+    }
+}
+
+/// Accumulates ticks into blocks.
+#[derive(Debug)]
+pub struct Recorder {
+    div: u64,
+    count: u64,
+    sum: [f64; CHANNELS],
+    rows: Vec<Block>,
+}
+
+impl Recorder {
+    /// Blocks of `div` ticks; `n_ticks` sizes the buffer.
+    #[must_use]
+    pub fn new(div: u64, n_ticks: u64) -> Recorder {
+        Recorder {
+            div: div.max(1),
+            count: 0,
+            sum: [0.0; CHANNELS],
+            rows: Vec::with_capacity((n_ticks / div.max(1)) as usize + 1),
+        }
+    }
+
+    /// Adds one tick: the controller's report and the plant's truth.
+    pub fn push(
+        &mut self,
+        r: &TickReport,
+        true_pos: nalgebra::Vector2<f64>,
+        true_vel: nalgebra::Vector2<f64>,
+        hand_n: [f64; 2],
+        acc: [f64; 2],
+    ) {
+        let pairs: [[f64; 2]; CHANNELS / 2] = [
+            r.position_m,
+            r.force_n,
+            r.pert_force_n,
+            r.velocity_m_per_s,
+            r.ref_position_m,
+            r.command_n,
+            [true_pos.x, true_pos.y],
+            [true_vel.x, true_vel.y],
+            hand_n,
+            acc,
+            r.pert_position_m,
+            r.anchor_position_m,
+        ];
+        for (i, p) in pairs.iter().enumerate() {
+            self.sum[2 * i] += p[0];
+            self.sum[2 * i + 1] += p[1];
+        }
+        self.count += 1;
+        if self.count == self.div {
+            let k = self.div as f64;
+            self.rows.push(Block {
+                v: self.sum.map(|s| s / k),
+            });
+            self.sum = [0.0; CHANNELS];
+            self.count = 0;
+        }
+    }
+
+    /// The complete blocks (a trailing partial block is dropped).
+    #[must_use]
+    pub fn finish(self) -> Vec<Block> {
+        self.rows
+    }
+}
+
+fn round_to(v: f64, quantum: f64) -> f64 {
+    let r = (v / quantum).round() * quantum;
+    // Print the shortest text: re-parse the decimal rendering of the rounded value.
+    let decimals = (-quantum.log10()).ceil().max(0.0) as usize;
+    // Adding 0.0 turns a negative zero into zero.
+    format!("{r:.decimals$}").parse().unwrap_or(r) + 0.0
+}
+
+/// Which columns a trial table gets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    /// Add `true_x_m, true_y_m, hand_fx_n, hand_fy_n`.
+    pub truth: bool,
+    /// Add `pert_x_m, pert_y_m` (position-perturbation offsets).
+    pub position_perturbation: bool,
+}
+
+/// The session table of a trial's rows at `rate_hz`.
+#[must_use]
+pub fn to_trial(rows: &[Block], rate_hz: f64, layout: Layout) -> Trial {
+    let col = |c: usize, q: f64| -> Vec<f64> { rows.iter().map(|b| round_to(b.v[c], q)).collect() };
+    let mut extra = Vec::new();
+    let mut named = |name: &str, c: usize, q: f64| {
+        extra.push(Column {
+            name: name.to_owned(),
+            values: col(c, q),
+        });
+    };
+    if layout.position_perturbation {
+        named("pert_x_m", ch::PERT_POS, 1e-7);
+        named("pert_y_m", ch::PERT_POS + 1, 1e-7);
+    }
+    if layout.truth {
+        named("true_x_m", ch::TRUE_X, 1e-7);
+        named("true_y_m", ch::TRUE_X + 1, 1e-7);
+        named("hand_fx_n", ch::HAND, 1e-4);
+        named("hand_fy_n", ch::HAND + 1, 1e-4);
+    }
+    Trial {
+        t_s: (0..rows.len()).map(|i| i as f64 / rate_hz).collect(),
+        x_m: col(ch::X, 1e-7),
+        y_m: col(ch::X + 1, 1e-7),
+        fx_n: col(ch::F, 1e-4),
+        fy_n: col(ch::F + 1, 1e-4),
+        pert_fx_n: col(ch::PERT, 1e-4),
+        pert_fy_n: col(ch::PERT + 1, 1e-4),
+        vx_m_per_s: Some(col(ch::V, 1e-6)),
+        vy_m_per_s: Some(col(ch::V + 1, 1e-6)),
+        ref_x_m: Some(col(ch::REF, 1e-7)),
+        ref_y_m: Some(col(ch::REF + 1, 1e-7)),
+        cmd_fx_n: Some(col(ch::CMD, 1e-3)),
+        cmd_fy_n: Some(col(ch::CMD + 1, 1e-3)),
+        extra,
+    }
+}
+
+/// Time of tick `k` on the table clock of blocks of `div` ticks, s.
+#[must_use]
+pub fn tick_time_s(k: u64, div: u64) -> f64 {
+    (k as f64 - (div.max(1) as f64 - 1.0) / 2.0) / super::TICK_HZ as f64
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rounding_gives_short_text() {
+        assert_eq!(format!("{}", round_to(0.123_456_789, 1e-7)), "0.1234568");
+        assert_eq!(format!("{}", round_to(-2.5e-9, 1e-7)), "0");
+        assert_eq!(format!("{}", round_to(14.999_96, 1e-4)), "15");
+    }
+
+    #[test]
+    fn block_centre_clock() {
+        // Blocks of 4 ticks: tick 1.5 is the centre of the first block, t = 0.
+        assert!((tick_time_s(1003, 4) - 1001.5 / 4000.0).abs() < 1e-15);
+        assert_eq!(tick_time_s(7, 1), 7.0 / 4000.0);
+    }
+}
