@@ -15,8 +15,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rapier2d_f64::prelude::{
-    FixedJointBuilder, ImpulseJointHandle, IntegrationParameters, MassProperties, PhysicsWorld,
-    PrismaticJointBuilder, RevoluteJointBuilder, RigidBodyBuilder, RigidBodyHandle, Vector,
+    GenericJointBuilder, ImpulseJointHandle, IntegrationParameters, JointAxesMask, LockedAxes,
+    MassProperties, PhysicsWorld, RevoluteJointBuilder, RigidBodyBuilder, RigidBodyHandle, Vector,
 };
 use rigtwin_arm::dynamics::JointState;
 use rigtwin_arm::kinematics::{self, Elbow};
@@ -139,39 +139,39 @@ impl SimRig {
                 .additional_mass_properties(MassProperties::new(Vector::ZERO, mass, inertia))
                 .can_sleep(false)
         };
-        let lower = world.bodies.insert(dynamic(
-            [p0[0], 0.0],
-            cfg.lower_cart_mass_kg,
-            CART_INERTIA_KG_M2,
-        ));
-        let upper = world
-            .bodies
-            .insert(dynamic(p0, cfg.upper_cart_mass_kg, CART_INERTIA_KG_M2));
+        // Carts and handle never rotate: the rails hold them. Their rotation is removed
+        // as a body degree of freedom instead of by angular joint rows, which costs the
+        // solver nothing (rapier's step time grows with every constraint row).
+        let lower = world.bodies.insert(
+            dynamic([p0[0], 0.0], cfg.lower_cart_mass_kg, CART_INERTIA_KG_M2)
+                // x rail: the prismatic joint to the fixed base, as locked body axes.
+                .locked_axes(LockedAxes::TRANSLATION_LOCKED_Y | LockedAxes::ROTATION_LOCKED),
+        );
+        let upper = world.bodies.insert(
+            dynamic(p0, cfg.upper_cart_mass_kg, CART_INERTIA_KG_M2)
+                .locked_axes(LockedAxes::ROTATION_LOCKED),
+        );
         let handle_mass =
             cfg.handle_mass_kg + cfg.effects.handle_mass.map_or(0.0, |h| h.extra_mass_kg);
-        let handle = world
-            .bodies
-            .insert(dynamic(p0, handle_mass, HANDLE_INERTIA_KG_M2));
-
-        // x rail: base → lower cart; anchors at the body origins (the cart's origin runs
-        // along y = 0 of the rig frame).
-        world.impulse_joints.insert(
-            base,
-            lower,
-            PrismaticJointBuilder::new(Vector::X).local_anchor1(Vector::new(0.0, 0.0)),
-            true,
+        let handle = world.bodies.insert(
+            dynamic(p0, handle_mass, HANDLE_INERTIA_KG_M2).locked_axes(LockedAxes::ROTATION_LOCKED),
         );
-        // y rail: lower cart → upper cart.
+        // y rail: prismatic along y from the lower cart; its angular row is redundant
+        // with the locked rotations, so only the x row remains.
         world.impulse_joints.insert(
             lower,
             upper,
-            PrismaticJointBuilder::new(Vector::Y).local_anchor2(Vector::new(0.0, -p0[1])),
+            GenericJointBuilder::new(JointAxesMask::LIN_X).local_anchor2(Vector::new(0.0, -p0[1])),
             true,
         );
-        // The force sensor: handle rigidly on the upper cart.
-        world
-            .impulse_joints
-            .insert(upper, handle, FixedJointBuilder::new(), true);
+        // The force sensor: the handle fixed on the upper cart (translation rows; the
+        // rotation row is again redundant).
+        world.impulse_joints.insert(
+            upper,
+            handle,
+            GenericJointBuilder::new(JointAxesMask::LIN_X | JointAxesMask::LIN_Y),
+            true,
+        );
 
         let mut arm = None;
         let mut spring_mass = None;
