@@ -188,6 +188,29 @@ pub struct HoldSummary {
     pub deviation_y_mm: MeanStd,
 }
 
+/// The Piovesan windowed regression over the hold trials (001_*).
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct PiovesanSummary {
+    /// Window estimates pooled (all trials and subjects).
+    pub windows: usize,
+    /// `K` per element over windows, N/m.
+    pub k_n_per_m: [[MeanStd; 2]; 2],
+    /// `B` per element over windows, N s/m.
+    pub b_ns_per_m: [[MeanStd; 2]; 2],
+    /// Canonical correlation r² over windows.
+    pub r2: MeanStd,
+    /// The inertia subtracted, kg.
+    pub m_hat_kg: [[f64; 2]; 2],
+    /// Calibration rig: the known stiffness diagonal, N/m.
+    pub k_true_n_per_m: Option<[f64; 2]>,
+    /// Calibration rig: relative error of the mean diagonal `K` per axis.
+    pub k_rel_error: Option<[f64; 2]>,
+    /// Calibration rig: largest relative deviation of a window's diagonal per axis.
+    pub k_max_rel_drift: Option<[f64; 2]>,
+    /// Trials the estimator refused, with why.
+    pub errors: Vec<String>,
+}
+
 /// The whole report.
 #[derive(Debug, Clone, Serialize)]
 pub struct Report {
@@ -229,6 +252,8 @@ pub struct Report {
     pub parameters: Vec<ParamRow>,
     /// Hold kinds.
     pub hold: Option<HoldSummary>,
+    /// Hold kinds: the Piovesan windowed regression.
+    pub piovesan: Option<PiovesanSummary>,
 }
 
 fn nrmse_of(est: &[[f64; 2]], truth: &[[f64; 2]]) -> f64 {
@@ -448,6 +473,7 @@ pub fn build(r: &Rehearsal) -> Report {
         deviation_x_mm: MeanStd::of(&push_dev[0]),
         deviation_y_mm: MeanStd::of(&push_dev[1]),
     });
+    let piovesan = (p.kind != ProtocolKind::ReachPerturb).then(|| piovesan_summary(r));
     Report {
         protocol: p.name.clone(),
         kind: p.kind.as_str().to_owned(),
@@ -472,7 +498,112 @@ pub fn build(r: &Rehearsal) -> Report {
         estimates,
         parameters,
         hold,
+        piovesan,
     }
+}
+
+/// Runs the windowed regression of 001_* on every hold trial. The force regressed is
+/// the one the handle exerts on the hand (minus the recorded hand force), and the
+/// inertia subtracted is the handle's plus the test mass (calibration rig) or the
+/// arm's endpoint inertia at the hold posture.
+fn piovesan_summary(r: &Rehearsal) -> PiovesanSummary {
+    use rigtwin_device::estimate::{
+        ImposedMotionTrial, PiovesanConfig, PositionPerturbation, windowed_impedance,
+    };
+    let p = &r.protocol;
+    let rate = f64::from(p.recording.rate_hz);
+    let m = &p.controller.imposed_motion;
+    let n_cycles = m.cycles as usize;
+    let period_s = 1.0 / m.frequency_hz;
+    // The full-amplitude part starts after the ramp; the controller starts at tick 1.
+    let full_start_s = crate::rehearse::record::tick_time_s(
+        1,
+        crate::rehearse::TICK_HZ / u64::from(p.recording.rate_hz),
+    ) + m.ramp_s;
+    let config = PiovesanConfig {
+        window_cycles: PiovesanConfig::default().window_cycles.min(n_cycles.max(1)),
+        ..PiovesanConfig::default()
+    };
+    let h = p.plant.handle_mass_kg;
+    let calibration = p.kind == ProtocolKind::CalibrationRig;
+    let mut out = PiovesanSummary::default();
+    let mut ks: [[Vec<f64>; 2]; 2] = Default::default();
+    let mut bs: [[Vec<f64>; 2]; 2] = Default::default();
+    let mut r2 = Vec::new();
+    for s in &r.subjects {
+        let m_hat = if calibration {
+            let k = p.calibration();
+            [[k.mass_kg + h, 0.0], [0.0, k.mass_kg + h]]
+        } else {
+            let hold = p.hold();
+            match estimate::endpoint_inertia(&s.subject.arm, s.subject.shoulder_m, hold.hand_m) {
+                Ok(mi) => [[mi[0][0] + h, mi[0][1]], [mi[1][0], mi[1][1] + h]],
+                Err(e) => {
+                    out.errors.push(format!("{}: {e}", s.subject.id));
+                    continue;
+                }
+            }
+        };
+        out.m_hat_kg = m_hat;
+        for t in &s.trials {
+            let Some(table) = &t.table else { continue };
+            let pushes: Vec<PositionPerturbation> = t
+                .pushes
+                .iter()
+                .map(|push| PositionPerturbation {
+                    onset_index: estimate::onset_index(push.onset_s, rate),
+                    cycle: (((push.onset_s - full_start_s) / period_s + 1e-6)
+                        .floor()
+                        .max(0.0) as usize)
+                        .min(n_cycles.saturating_sub(1)),
+                })
+                .collect();
+            let fx: Vec<f64> = table.fx_n.iter().map(|v| -v).collect();
+            let fy: Vec<f64> = table.fy_n.iter().map(|v| -v).collect();
+            let trial = ImposedMotionTrial {
+                x_m: [&table.x_m, &table.y_m],
+                force_n: [&fx, &fy],
+                perturbations: &pushes,
+                n_cycles,
+            };
+            match windowed_impedance(&trial, rate, &m_hat, &config) {
+                Ok(windows) => {
+                    for w in windows {
+                        for i in 0..2 {
+                            for j in 0..2 {
+                                ks[i][j].push(w.k_n_per_m[i][j]);
+                                bs[i][j].push(w.b_ns_per_m[i][j]);
+                            }
+                        }
+                        r2.push(w.canonical_r2);
+                        out.windows += 1;
+                    }
+                }
+                Err(e) => out
+                    .errors
+                    .push(format!("{} trial {}: {e}", s.subject.id, t.id)),
+            }
+        }
+    }
+    for i in 0..2 {
+        for j in 0..2 {
+            out.k_n_per_m[i][j] = MeanStd::of(&ks[i][j]);
+            out.b_ns_per_m[i][j] = MeanStd::of(&bs[i][j]);
+        }
+    }
+    out.r2 = MeanStd::of(&r2);
+    if calibration && out.windows > 0 {
+        let k = p.calibration().stiffness_n_per_m;
+        out.k_true_n_per_m = Some(k);
+        out.k_rel_error = Some([0, 1].map(|a| out.k_n_per_m[a][a].mean / k[a] - 1.0));
+        out.k_max_rel_drift = Some([0, 1].map(|a| {
+            ks[a][a]
+                .iter()
+                .map(|v| (v / k[a] - 1.0).abs())
+                .fold(0.0, f64::max)
+        }));
+    }
+    out
 }
 
 fn parameter_rows(estimates: &[SubjectEstimate]) -> Vec<ParamRow> {
