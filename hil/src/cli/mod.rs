@@ -6,6 +6,7 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod diagnose;
 pub mod estimate;
 pub mod inspect;
 pub mod rehearse;
@@ -36,6 +37,8 @@ pub enum Command {
     Rehearse(rehearse::Args),
     /// Estimate impedance from a session's perturbed trials (measured or simulated).
     Estimate(estimate::Args),
+    /// Name the plant effect the nominal model misses in a measured session.
+    Diagnose(diagnose::Args),
 }
 
 /// Runs the parsed command line.
@@ -47,5 +50,6 @@ pub fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Inspect(args) => inspect::run(args),
         Command::Rehearse(args) => rehearse::run(args),
         Command::Estimate(args) => estimate::run(args),
+        Command::Diagnose(args) => diagnose::run(args),
     }
 }

@@ -1,0 +1,93 @@
+//! `rigtwin diagnose`: name the physical cause of what the nominal model gets wrong
+//! about a measured session, from the cart force balance.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+use rigtwin::discrepancy::{DiagnoseOptions, ExtendedModel, diagnose, table, write_report};
+use rigtwin::session::Session;
+
+/// Name the plant effect that the nominal model misses in a measured session. Fits every
+/// plant-side catalog effect (rail-friction, force-ripple, actuation-delay,
+/// sensor-rotation) to the force balance of the carts, m·a = u(t − τ) + F + effect, on
+/// training trials, judges each on held-out trials against the nominal balance, and
+/// names the cause only when its gain is beyond chance (fold t-test) and material
+/// (≥ 10 %). Needs the motor command columns cmd_fx_n, cmd_fy_n. Writes diagnosis.md
+/// with PNG figures into <session>/diagnosis (or --report-dir).
+#[derive(Debug, Clone, clap::Args)]
+#[command(after_help = "\
+Examples:
+  rigtwin diagnose ../shared/recordings/example-friction
+  rigtwin diagnose ../shared/recordings/example-none --json --write-model model.toml
+  rigtwin diagnose session/ --report-dir /tmp/diag --folds 4")]
+pub struct Args {
+    /// Session directory (with session.toml).
+    pub session: PathBuf,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the extended model (the cause's effect, world keys) to this TOML file.
+    #[arg(long, value_name = "FILE")]
+    pub write_model: Option<PathBuf>,
+    /// Where diagnosis.md and its figures go (default: <session>/diagnosis).
+    #[arg(long, value_name = "DIR")]
+    pub report_dir: Option<PathBuf>,
+    /// Do not write diagnosis.md and figures.
+    #[arg(long)]
+    pub no_report: bool,
+    /// Cross-validation folds (whole trials).
+    #[arg(long, default_value_t = 8)]
+    pub folds: usize,
+    /// Family-wise false-alarm level of the fold t-test.
+    #[arg(long, default_value_t = 0.01)]
+    pub alpha: f64,
+    /// Smallest held-out gain that names a cause (fraction).
+    #[arg(long, default_value_t = 0.10)]
+    pub min_gain: f64,
+}
+
+/// Runs `rigtwin diagnose`.
+///
+/// # Errors
+/// A session that cannot be read, a fit that cannot be made, a file that cannot be
+/// written.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.folds < 2 {
+        anyhow::bail!("--folds must be at least 2, got {}", args.folds);
+    }
+    if !(args.alpha > 0.0 && args.alpha < 1.0) {
+        anyhow::bail!("--alpha must be in (0, 1), got {}", args.alpha);
+    }
+    let session = Session::read(&args.session)
+        .with_context(|| format!("reading session {}", args.session.display()))?;
+    let opts = DiagnoseOptions {
+        folds: args.folds,
+        alpha: args.alpha,
+        min_gain: args.min_gain,
+    };
+    let analysis = diagnose(&session, &opts)
+        .with_context(|| format!("diagnosing {}", args.session.display()))?;
+    let d = &analysis.diagnosis;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(d)?);
+    } else {
+        print!("{}", table(d));
+    }
+    if let Some(path) = &args.write_model {
+        ExtendedModel::from_diagnosis(d).write(path)?;
+        if !args.json {
+            println!("model written to {}", path.display());
+        }
+    }
+    if !args.no_report {
+        let dir = args
+            .report_dir
+            .clone()
+            .unwrap_or_else(|| args.session.join("diagnosis"));
+        let files = write_report(&analysis, &dir)?;
+        if let (false, Some(md)) = (args.json, files.first()) {
+            println!("report written to {}", md.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,48 @@
+//! The discrepancy workflow: what the simulation gets wrong about a measured session,
+//! which physical cause explains it, and how much the extended model gains.
+//!
+//! | file | idea |
+//! |---|---|
+//! | `signals.rs` | one smoothing for every term of the cart balance ([`BalanceSignals`]) |
+//! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
+//! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
+//! | `gram.rs` | least squares as sums of per-trial sufficient statistics |
+//! | `crossval.rs` | folds of whole trials; held-out error |
+//! | `stats.rs` | Student's t and the jackknife behind the chance threshold |
+//! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
+//! | `model.rs` | the extended model as TOML (`--write-model`) |
+//! | `plots.rs` | the PNG figures of `diagnosis.md` |
+//! | `report.rs` | the table a person reads and `diagnosis.md` |
+
+mod candidate;
+mod crossval;
+mod delay;
+mod diagnose;
+mod error;
+mod friction;
+mod gram;
+mod model;
+pub mod plots;
+mod report;
+mod ripple;
+mod rotation;
+mod signals;
+pub mod stats;
+
+pub use candidate::{Baseline, Candidate, masses, nominal_target, push_rows, residual_rows};
+pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
+pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
+pub use diagnose::{
+    Analysis, CandidateFit, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE, Ranked,
+    Threshold, diagnose,
+};
+pub use error::DiscrepancyError;
+pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
+pub use gram::Gram;
+pub use model::ExtendedModel;
+pub use report::{table, write_report};
+pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
+pub use rotation::SensorRotation;
+pub use signals::{
+    BalanceSignals, EVALUATION_RATE_HZ, SMOOTHING_ORDER, SMOOTHING_WINDOW_S, window_for_rate,
+};

@@ -1,0 +1,119 @@
+//! The extended model that `diagnose --write-model` writes and `compare --model` reads:
+//! the plant effect named as the cause, in the world's own [`PlantEffects`] keys, so
+//! the same table configures `rigtwin_world::RigConfig::effects`.
+
+use std::path::Path;
+
+use rigtwin_world::PlantEffects;
+use rigtwin_world::config::{ActuationDelay, ForceRipple, RailFriction, SensorEffect};
+use serde::{Deserialize, Serialize};
+
+use super::diagnose::Diagnosis;
+use super::error::DiscrepancyError;
+
+/// A model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExtendedModel {
+    /// Session it was fitted to.
+    pub fitted_to: String,
+    /// Catalog name of the cause, or `none`.
+    pub cause: String,
+    /// Held-out gain of the model over the nominal balance.
+    pub gain: f64,
+    /// Fitted moving mass of the x axis (both carts), kg.
+    pub moving_mass_x_kg: f64,
+    /// Fitted moving mass of the y axis (upper cart), kg.
+    pub moving_mass_y_kg: f64,
+    /// The effects, as `rigtwin_world::PlantEffects`.
+    pub effects: PlantEffects,
+}
+
+fn get(d: &Diagnosis, k: &str) -> Option<f64> {
+    d.parameters.get(k).copied()
+}
+
+impl ExtendedModel {
+    /// The model a diagnosis names. A ripple's fitted phase has no key in the world's
+    /// law (which starts the magnets at `q = 0`) and is dropped.
+    #[must_use]
+    pub fn from_diagnosis(d: &Diagnosis) -> ExtendedModel {
+        let mut effects = PlantEffects::default();
+        match d.cause.as_str() {
+            "rail-friction" => {
+                if let (Some(c), Some(b), Some(vs)) = (
+                    get(d, "coulomb_n"),
+                    get(d, "viscous_n_s_per_m"),
+                    get(d, "smooth_velocity_m_per_s"),
+                ) {
+                    effects.rail_friction = Some(RailFriction {
+                        coulomb_n: c.max(0.0),
+                        viscous_n_s_per_m: b.max(0.0),
+                        smooth_velocity_m_per_s: vs,
+                    });
+                }
+            }
+            "force-ripple" => {
+                if let (Some(a), Some(p)) = (get(d, "amplitude_n"), get(d, "pitch_m")) {
+                    effects.force_ripple = Some(ForceRipple {
+                        amplitude_n: a,
+                        pitch_m: p,
+                    });
+                }
+            }
+            "actuation-delay" => {
+                if let Some(ms) = get(d, "delay_ms") {
+                    effects.actuation_delay = Some(ActuationDelay {
+                        delay_ms: ms.max(0.0),
+                    });
+                }
+            }
+            "sensor-rotation" => {
+                if let Some(deg) = get(d, "angle_deg") {
+                    effects.sensor = Some(SensorEffect {
+                        rotation_deg: deg,
+                        offset_n: [0.0; 2],
+                        lowpass_hz: 0.0,
+                    });
+                }
+            }
+            _ => {}
+        }
+        let m = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
+        ExtendedModel {
+            fitted_to: d.session.clone(),
+            cause: d.cause.clone(),
+            gain: d.gain.unwrap_or(0.0),
+            moving_mass_x_kg: m("moving_mass_x_kg"),
+            moving_mass_y_kg: m("moving_mass_y_kg"),
+            effects,
+        }
+    }
+
+    /// Writes the model as TOML.
+    ///
+    /// # Errors
+    /// [`DiscrepancyError::Model`] when it cannot be serialised or written.
+    pub fn write(&self, path: &Path) -> Result<(), DiscrepancyError> {
+        let err = |reason: String| DiscrepancyError::Model {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let text = toml::to_string(self).map_err(|e| err(e.to_string()))?;
+        let text = format!("# Extended plant model written by `rigtwin diagnose`.\n{text}");
+        std::fs::write(path, text).map_err(|e| err(e.to_string()))
+    }
+
+    /// Reads a model file.
+    ///
+    /// # Errors
+    /// [`DiscrepancyError::Model`] naming the file and the TOML error (line, key).
+    pub fn read(path: &Path) -> Result<ExtendedModel, DiscrepancyError> {
+        let err = |reason: String| DiscrepancyError::Model {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        toml::from_str(&text).map_err(|e| err(e.to_string()))
+    }
+}

@@ -1,0 +1,404 @@
+//! What a person reads: the ranking table of `rigtwin diagnose` and `diagnosis.md`
+//! with its figures (the plot that shows the cause, a held-out trial measured vs
+//! baseline vs extended, the ranking).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use super::candidate::{Baseline, Candidate as _};
+use super::crossval::Folds;
+use super::diagnose::{Analysis, CandidateFit, Diagnosis};
+use super::error::DiscrepancyError;
+use super::plots::{Drawn, Figure, Series, Style};
+
+fn fmt_params(
+    r: &std::collections::BTreeMap<String, f64>,
+    se: &std::collections::BTreeMap<String, f64>,
+) -> String {
+    r.iter()
+        .map(|(k, v)| match se.get(k) {
+            Some(s) if s.is_finite() => format!("{k} {} ± {}", sig(*v), sig(*s)),
+            _ => format!("{k} {}", sig(*v)),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Four significant digits, plain for ordinary magnitudes.
+fn sig(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let mag = v.abs().log10().floor() as i32;
+    if (-3..5).contains(&mag) {
+        let decimals = (3 - mag).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+/// The ranking table printed by `rigtwin diagnose`.
+#[must_use]
+pub fn table(d: &Diagnosis) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "session {}  ({} of {} trials with motor command, {} Hz, {} folds)",
+        d.session, d.trials_used, d.trials_total, d.rate_hz, d.folds
+    );
+    if let Some(b) = d.baseline_nrmse {
+        let g = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
+        let _ = writeln!(
+            out,
+            "nominal balance  moving mass x {:.3} kg, y {:.3} kg, latency {:.3} ms, held-out NRMSE {:.4}\n",
+            g("moving_mass_x_kg"),
+            g("moving_mass_y_kg"),
+            g("latency_ms"),
+            b
+        );
+        let _ = writeln!(
+            out,
+            "{:<4} {:<16} {:>8} {:>9} {:>8}  {:<8} parameters",
+            "rank", "candidate", "gain %", "NRMSE", "t", "verdict"
+        );
+        for (i, r) in d.ranking.iter().enumerate() {
+            let verdict = if r.name == d.cause {
+                "CAUSE"
+            } else if r.significant {
+                "also"
+            } else {
+                "-"
+            };
+            let _ = writeln!(
+                out,
+                "{:<4} {:<16} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
+                i + 1,
+                r.name,
+                100.0 * r.gain,
+                r.extended_nrmse,
+                r.t_statistic,
+                verdict,
+                fmt_params(&r.parameters, &r.parameter_se)
+            );
+        }
+        let _ = writeln!(out);
+    }
+    let _ = writeln!(
+        out,
+        "cause: {}{}",
+        d.cause,
+        match (d.gain, &d.runner_up) {
+            (Some(g), Some(r)) if d.cause != "none" =>
+                format!("  held-out gain {:.1} %  (runner-up {r})", 100.0 * g),
+            (_, Some(r)) => format!("  (best candidate {r} stays below the threshold)"),
+            _ => String::new(),
+        }
+    );
+    if !d.parameters.is_empty() {
+        let _ = writeln!(
+            out,
+            "parameters: {}",
+            fmt_params(&d.parameters, &d.parameter_se)
+        );
+    }
+    if let Some(t) = &d.threshold {
+        let _ = writeln!(out, "rule: {}", t.rule);
+    }
+    for n in &d.not_judged {
+        let _ = writeln!(out, "not judged: {:<16} {}", n.effect, n.reason);
+    }
+    out
+}
+
+/// The figure that shows the candidate `cf` at work.
+fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, DiscrepancyError> {
+    let Some(base) = &a.baseline else {
+        return Ok(None);
+    };
+    let c = cf.candidate.as_ref();
+    let fit = &cf.fit;
+    let (name, value) = c.setting(fit.setting);
+    if c.effect_force(fit.setting, &fit.beta, 1, 0.0, 0.0)
+        .is_some()
+    {
+        // Against the state: velocity for friction, position of the long axis otherwise.
+        let by_velocity = c.name() == "rail-friction";
+        let axes: Vec<usize> = if by_velocity { vec![0, 1] } else { vec![1] };
+        let mut cloud = Vec::new();
+        for sig in &a.signals {
+            let r = Baseline.residual(sig, 0, &base.beta, a.latency_s)?;
+            for &axis in &axes {
+                let st = if by_velocity {
+                    sig.at_rows(&sig.v[axis])
+                } else {
+                    sig.at_rows(&sig.q[axis])
+                };
+                cloud.extend(st.iter().zip(&r[axis]).map(|(s, r)| (*s, -r)));
+            }
+        }
+        let step = (cloud.len() / 20_000).max(1);
+        let dots: Vec<(f64, f64)> = cloud.iter().step_by(step).copied().collect();
+        let (lo, hi) = cloud
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                (l.min(p.0), h.max(p.0))
+            });
+        let bins = 120;
+        let mut sums = vec![(0.0, 0usize); bins];
+        for (s, e) in &cloud {
+            let b = (((s - lo) / (hi - lo).max(1e-12)) * bins as f64)
+                .floor()
+                .clamp(0.0, (bins - 1) as f64) as usize;
+            sums[b].0 += e;
+            sums[b].1 += 1;
+        }
+        let mean: Vec<(f64, f64)> = sums
+            .iter()
+            .enumerate()
+            .filter(|(_, (_, n))| *n >= 5)
+            .map(|(i, (s, n))| {
+                (
+                    lo + (i as f64 + 0.5) * (hi - lo) / bins as f64,
+                    s / *n as f64,
+                )
+            })
+            .collect();
+        let model: Vec<(f64, f64)> = (0..=400)
+            .filter_map(|i| {
+                let s = lo + (hi - lo) * f64::from(i) / 400.0;
+                let e = if by_velocity {
+                    c.effect_force(fit.setting, &fit.beta, 1, 0.0, s)
+                } else {
+                    c.effect_force(fit.setting, &fit.beta, 1, s, 0.0)
+                };
+                e.map(|e| (s, e))
+            })
+            .collect();
+        return Ok(Some(Figure {
+            title: format!(
+                "{}: unexplained cart force of the nominal balance",
+                c.name()
+            ),
+            x_desc: if by_velocity {
+                "cart velocity (m/s)".into()
+            } else {
+                "y cart position (m)".into()
+            },
+            y_desc: "m·a − u − F (N)".into(),
+            series: vec![
+                Series {
+                    label: "samples".into(),
+                    points: dots,
+                    style: Style::Dots,
+                    rgb: (120, 120, 120),
+                },
+                Series {
+                    label: "bin means".into(),
+                    points: mean,
+                    style: Style::Line,
+                    rgb: (30, 90, 200),
+                },
+                Series {
+                    label: format!("fitted {}", c.name()),
+                    points: model,
+                    style: Style::Bold,
+                    rgb: (210, 50, 40),
+                },
+            ],
+            bars: Vec::new(),
+            hline: None,
+        }));
+    }
+    // A search over a timing or angle: NRMSE on all trials against the setting.
+    let norm: f64 = fit.folds.iter().map(|f| f.test_norm_sq).sum();
+    let curve: Vec<(f64, f64)> = fit
+        .curve
+        .iter()
+        .enumerate()
+        .map(|(s, sse)| (c.setting(s).1, (sse / norm).sqrt()))
+        .collect();
+    let (y0, y1) = curve
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p.1), h.max(p.1))
+        });
+    Ok(Some(Figure {
+        title: format!("{}: balance error against {name}", c.name()),
+        x_desc: name.replace('_', " "),
+        y_desc: "NRMSE of the balance, all trials".into(),
+        series: vec![
+            Series {
+                label: "search".into(),
+                points: curve,
+                style: Style::Line,
+                rgb: (30, 90, 200),
+            },
+            Series {
+                label: format!("fit {name} = {}", sig(value)),
+                points: vec![(value, y0), (value, y1)],
+                style: Style::Bold,
+                rgb: (210, 50, 40),
+            },
+        ],
+        bars: Vec::new(),
+        hline: None,
+    }))
+}
+
+/// A held-out trial of fold 0 (a perturbed one if there is), y axis: measured motor
+/// command against what the baseline and the extended model say it must have been.
+fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, DiscrepancyError> {
+    let Some(base) = &a.baseline else {
+        return Ok(None);
+    };
+    let folds = Folds::interleaved(a.signals.len(), a.diagnosis.folds);
+    let held: Vec<usize> = (0..a.signals.len())
+        .filter(|i| folds.of_trial.get(*i) == Some(&0))
+        .collect();
+    let Some(&ti) = held
+        .iter()
+        .find(|i| a.signals[**i].perturbed)
+        .or(held.first())
+    else {
+        return Ok(None);
+    };
+    let sig = &a.signals[ti];
+    let (Some(bf), Some(ef)) = (base.folds.first(), cf.fit.folds.first()) else {
+        return Ok(None);
+    };
+    let rb = Baseline.residual(sig, 0, &bf.beta, a.latency_s)?;
+    let re = cf
+        .candidate
+        .residual(sig, ef.setting, &ef.beta, a.latency_s)?;
+    let u = sig.at_rows(&sig.u[1]);
+    let t: Vec<f64> = sig.rows.iter().map(|i| *i as f64 / sig.rate_hz).collect();
+    let line = |pred: Option<&Vec<f64>>| -> Vec<(f64, f64)> {
+        t.iter()
+            .zip(&u)
+            .enumerate()
+            .map(|(k, (t, u))| (*t, u - pred.map_or(0.0, |r| r[k])))
+            .collect()
+    };
+    Ok(Some(Figure {
+        title: format!("held-out trial {} (y axis): motor command", sig.id),
+        x_desc: "time (s)".into(),
+        y_desc: "motor force (N)".into(),
+        series: vec![
+            Series {
+                label: "measured".into(),
+                points: line(None),
+                style: Style::Bold,
+                rgb: (40, 40, 40),
+            },
+            Series {
+                label: "baseline".into(),
+                points: line(Some(&rb[1])),
+                style: Style::Line,
+                rgb: (30, 90, 200),
+            },
+            Series {
+                label: format!("extended ({})", cf.candidate.name()),
+                points: line(Some(&re[1])),
+                style: Style::Line,
+                rgb: (210, 50, 40),
+            },
+        ],
+        bars: Vec::new(),
+        hline: None,
+    }))
+}
+
+fn ranking_figure(d: &Diagnosis) -> Figure {
+    Figure {
+        title: "held-out gain of each candidate (line: material floor)".into(),
+        x_desc: "candidate".into(),
+        y_desc: "gain (%)".into(),
+        series: Vec::new(),
+        bars: d
+            .ranking
+            .iter()
+            .map(|r| (r.name.clone(), 100.0 * r.gain, r.name == d.cause))
+            .collect(),
+        hline: d.threshold.as_ref().map(|t| 100.0 * t.min_gain),
+    }
+}
+
+/// Writes `diagnosis.md` and its PNG figures into `dir` (created if missing); returns
+/// the files written.
+///
+/// # Errors
+/// [`DiscrepancyError::Write`] when a file cannot be written.
+pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, DiscrepancyError> {
+    let werr = |p: &Path, e: std::io::Error| DiscrepancyError::Write {
+        path: p.to_path_buf(),
+        reason: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| werr(dir, e))?;
+    let d = &a.diagnosis;
+    let mut written = Vec::new();
+    let mut figs: Vec<(String, &str, Figure)> = Vec::new();
+    let shown = a
+        .fits
+        .iter()
+        .find(|f| f.candidate.name() == d.cause)
+        .or(a.fits.first());
+    if let Some(cf) = shown {
+        if let Some(f) = cause_figure(a, cf)? {
+            figs.push(("cause.png".into(), "What the cause looks like", f));
+        }
+        if let Some(f) = heldout_figure(a, cf)? {
+            figs.push((
+                "heldout.png".into(),
+                "A held-out trial: measured vs baseline vs extended",
+                f,
+            ));
+        }
+    }
+    if !d.ranking.is_empty() {
+        figs.push(("ranking.png".into(), "Ranking", ranking_figure(d)));
+    }
+    let mut md = String::new();
+    let _ = writeln!(md, "# Diagnosis of `{}`\n", d.session);
+    let _ = writeln!(
+        md,
+        "**Cause: {}**{}\n",
+        d.cause,
+        match (d.baseline_nrmse, d.extended_nrmse, d.gain) {
+            (Some(b), Some(e), Some(g)) => format!(
+                " — held-out NRMSE of the cart force balance {b:.4} (baseline) → {e:.4} (extended), gain {:.1} %",
+                100.0 * g
+            ),
+            _ => String::new(),
+        }
+    );
+    let _ = writeln!(md, "```text\n{}```\n", table(d));
+    let _ = writeln!(md, "## Evidence\n");
+    for e in &d.evidence {
+        let _ = writeln!(md, "- {e}");
+    }
+    let _ = writeln!(md, "\n## Figures\n");
+    for (file, caption, fig) in &figs {
+        let path = dir.join(file);
+        let drawn = fig.draw(&path)?;
+        let note = if drawn == Drawn::WithoutText {
+            " (drawn without text: no system font)"
+        } else {
+            ""
+        };
+        let _ = writeln!(md, "### {caption}{note}\n\n![{caption}]({file})\n");
+        written.push(path);
+    }
+    let _ = writeln!(
+        md,
+        "## Method\n\nThe carts obey `m·a = u(t − τ) + F + effects` per axis (x: both carts, y: upper cart; the \
+         sensor is under the handle, so its reading already carries the handle's inertia). Masses and a nominal \
+         latency (≤ 0.75 ms) are fitted; each candidate adds its terms; all fits are made on training trials and \
+         judged on held-out trials ({} folds of whole trials).",
+        d.folds
+    );
+    let md_path = dir.join("diagnosis.md");
+    std::fs::write(&md_path, md).map_err(|e| werr(&md_path, e))?;
+    written.insert(0, md_path);
+    Ok(written)
+}

@@ -1,0 +1,133 @@
+//! Candidate `force-ripple`: motor cogging `A · sin(2π q / p + φ)` added to each axis's
+//! motor force at its cart position `q` (the catalog's `amplitude_n`, `pitch_m`; the
+//! phase is fitted too because a foreign rig's magnets need not start at `q = 0`).
+//!
+//! The pitch is searched on a grid uniform in wavenumber `1/p`, with a spacing of
+//! `1/(8 L)` for a travel `L`: a pitch error of one step then turns the fitted sinusoid
+//! by at most π/8 over the travel, so the true pitch never falls between two grid
+//! points that both miss it. For each pitch the amplitude and phase are linear
+//! (`sin`, `cos` columns), shared by both axes as in the catalog law. The sinusoids are
+//! evaluated on the smoothed position without smoothing them again: at the speeds of a
+//! reach (< 0.2 m/s) and pitches above 3 mm the ripple stays below ~60 Hz, where the
+//! smoothing passes it.
+
+use std::f64::consts::TAU;
+
+use super::candidate::{Candidate, nominal_target, residual_rows};
+use super::error::DiscrepancyError;
+use super::gram::Gram;
+use super::signals::BalanceSignals;
+
+/// Shortest pitch searched, m.
+pub const MIN_PITCH_M: f64 = 3e-3;
+/// Longest pitch searched, m (also at most half the travel: two periods are needed to
+/// tell a ripple from a slow trend).
+pub const MAX_PITCH_M: f64 = 0.1;
+
+/// The force-ripple candidate over a wavenumber grid.
+#[derive(Debug, Clone, Copy)]
+pub struct ForceRipple {
+    /// First wavenumber, 1/m.
+    pub k0_per_m: f64,
+    /// Wavenumber step, 1/m.
+    pub dk_per_m: f64,
+    /// Number of wavenumbers.
+    pub n: usize,
+}
+
+impl ForceRipple {
+    /// The grid for a largest travel `travel_m` of one axis over the session.
+    #[must_use]
+    pub fn for_travel(travel_m: f64) -> Self {
+        let travel = travel_m.max(4.0 * MIN_PITCH_M);
+        let k0 = 1.0 / MAX_PITCH_M.min(0.5 * travel);
+        let k1 = 1.0 / MIN_PITCH_M;
+        let dk = 1.0 / (8.0 * travel);
+        let n = ((k1 - k0) / dk).floor().max(0.0) as usize + 1;
+        ForceRipple {
+            k0_per_m: k0,
+            dk_per_m: dk,
+            n,
+        }
+    }
+
+    /// Pitch of setting `s`, m.
+    #[must_use]
+    pub fn pitch_m(&self, s: usize) -> f64 {
+        1.0 / (self.k0_per_m + s as f64 * self.dk_per_m)
+    }
+}
+
+impl Candidate for ForceRipple {
+    fn name(&self) -> &'static str {
+        "force-ripple"
+    }
+    fn settings(&self) -> usize {
+        self.n
+    }
+    fn setting(&self, s: usize) -> (&'static str, f64) {
+        ("pitch_m", self.pitch_m(s))
+    }
+    fn columns(&self) -> usize {
+        4
+    }
+    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
+        let mut grams = vec![Gram::new(4); self.n];
+        let mut x = [0.0; 4];
+        for axis in 0..2 {
+            let (target, norm) = nominal_target(sig, axis, latency_s);
+            let a = sig.at_rows(&sig.a[axis]);
+            let q = sig.at_rows(&sig.q[axis]);
+            for r in 0..q.len() {
+                // e^{i 2π k q} for k = k0 + j dk by a rotation recurrence over j.
+                let (s0, c0) = (TAU * self.k0_per_m * q[r]).sin_cos();
+                let (sd, cd) = (TAU * self.dk_per_m * q[r]).sin_cos();
+                let (mut s, mut c) = (s0, c0);
+                x[0] = if axis == 0 { a[r] } else { 0.0 };
+                x[1] = if axis == 1 { a[r] } else { 0.0 };
+                for g in &mut grams {
+                    x[2] = s;
+                    x[3] = c;
+                    g.push(&x, target[r], norm[r]);
+                    (s, c) = (s * cd + c * sd, c * cd - s * sd);
+                }
+            }
+        }
+        Ok(grams)
+    }
+    fn parameters(&self, s: usize, beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
+        let (bs, bc) = (
+            beta.get(2).copied().unwrap_or(f64::NAN),
+            beta.get(3).copied().unwrap_or(f64::NAN),
+        );
+        vec![
+            ("amplitude_n".to_string(), bs.hypot(bc)),
+            ("pitch_m".to_string(), self.pitch_m(s)),
+            ("phase_rad".to_string(), (-bc).atan2(-bs)),
+        ]
+    }
+    fn effect_force(&self, s: usize, beta: &[f64], _axis: usize, q: f64, _v: f64) -> Option<f64> {
+        let (bs, bc) = (beta.get(2)?, beta.get(3)?);
+        let ph = TAU * q / self.pitch_m(s);
+        Some(-(bs * ph.sin() + bc * ph.cos()))
+    }
+    fn residual(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        beta: &[f64],
+        latency_s: f64,
+    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
+        let t = [
+            nominal_target(sig, 0, latency_s).0,
+            nominal_target(sig, 1, latency_s).0,
+        ];
+        let q = [sig.at_rows(&sig.q[0]), sig.at_rows(&sig.q[1])];
+        let k = 1.0 / self.pitch_m(s);
+        Ok(residual_rows(sig, &t, beta, |axis, r, x| {
+            let (sn, cs) = (TAU * k * q[axis][r]).sin_cos();
+            x[0] = sn;
+            x[1] = cs;
+        }))
+    }
+}
