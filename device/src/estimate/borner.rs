@@ -195,8 +195,12 @@ impl Pipeline {
     }
 
     /// The linear filter `F`: Savitzky–Golay jerk then the zero-phase high-pass.
-    fn filtered_jerk(&self, y: &[f64]) -> Result<Vec<f64>, EstimateError> {
-        let jerk = savgol_fft(y, self.window, self.polyorder, 3, self.dt_s)?;
+    fn filtered_jerk(
+        &self,
+        planner: &mut RealFftPlanner<f64>,
+        y: &[f64],
+    ) -> Result<Vec<f64>, EstimateError> {
+        let jerk = savgol_fft(planner, y, self.window, self.polyorder, 3, self.dt_s)?;
         match &self.sos {
             Some(sos) => sosfiltfilt(sos, &jerk)
                 .map_err(EstimateError::signal("high-pass filtering the jerk")),
@@ -208,6 +212,7 @@ impl Pipeline {
     /// integral of `y` (so that `F(∫∫∫ y)` is the filtered `y`).
     fn filtered_integral_at(
         &self,
+        planner: &mut RealFftPlanner<f64>,
         y: &[f64],
         order: usize,
         k: usize,
@@ -216,11 +221,16 @@ impl Pipeline {
         for _ in 0..order {
             acc = cumulative_trapezoid(&acc, self.dt_s);
         }
-        Ok(self.filtered_jerk(&acc)?.get(k).copied().unwrap_or(0.0))
+        Ok(self
+            .filtered_jerk(planner, &acc)?
+            .get(k)
+            .copied()
+            .unwrap_or(0.0))
     }
 
     fn variational(
         &self,
+        planner: &mut RealFftPlanner<f64>,
         trial: &PerturbedTrial<'_>,
         adm: &Admittance,
     ) -> Result<VariationalDynamics, EstimateError> {
@@ -256,7 +266,7 @@ impl Pipeline {
         let mut u = vec![[0.0; 2]; n];
         for axis in 0..2 {
             let x = trial.x_m[axis];
-            let jerk = self.filtered_jerk(x)?;
+            let jerk = self.filtered_jerk(planner, x)?;
             let seg = &jerk[k0..end];
             let (c0, c1, c2) = match self.mode {
                 VariationalMode::Seed => (0.0, 0.0, 0.0),
@@ -266,9 +276,9 @@ impl Pipeline {
                     let x0 = x[0];
                     let centred: Vec<f64> = x.iter().map(|v| v - x0).collect();
                     (
-                        self.filtered_integral_at(&centred, 3, k0)?,
-                        self.filtered_integral_at(&centred, 2, k0)?,
-                        self.filtered_integral_at(&centred, 1, k0)?,
+                        self.filtered_integral_at(planner, &centred, 3, k0)?,
+                        self.filtered_integral_at(planner, &centred, 2, k0)?,
+                        self.filtered_integral_at(planner, &centred, 1, k0)?,
                     )
                 }
             };
@@ -291,7 +301,7 @@ impl Pipeline {
                     for _ in 0..3 {
                         acc = cumulative_trapezoid(&acc, self.dt_s);
                     }
-                    self.filtered_jerk(&acc)?[k0..end].to_vec()
+                    self.filtered_jerk(planner, &acc)?[k0..end].to_vec()
                 }
             };
             for i in 0..n {
@@ -325,6 +335,7 @@ impl Pipeline {
 /// the first and last `window` samples), 10–20x fewer operations at the seed's
 /// window of 253 samples.
 pub(crate) fn savgol_fft(
+    planner: &mut RealFftPlanner<f64>,
     y: &[f64],
     window: usize,
     polyorder: usize,
@@ -344,7 +355,7 @@ pub(crate) fn savgol_fft(
         savgol_coeffs(window, polyorder, deriv, dt_s).map_err(EstimateError::signal(step))?;
     let half = window / 2;
     let nfft = (n + window - 1).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
+    // The planner caches plans by length: trials of one session share them.
     let fwd = planner.plan_fft_forward(nfft);
     let inv = planner.plan_fft_inverse(nfft);
     let fft_err = |e: realfft::FftError| EstimateError::Signal {
@@ -427,7 +438,7 @@ pub fn variational_dynamics(
     config: &BornerConfig,
 ) -> Result<VariationalDynamics, EstimateError> {
     check_admittance(admittance)?;
-    Pipeline::new(fs_hz, config)?.variational(trial, admittance)
+    Pipeline::new(fs_hz, config)?.variational(&mut RealFftPlanner::new(), trial, admittance)
 }
 
 fn check_admittance(adm: &Admittance) -> Result<(), EstimateError> {
@@ -469,9 +480,10 @@ pub fn estimate_involuntary_impedance(
     check_admittance(admittance)?;
     check_finite_mat2("M_BSP", m_bsp_kg)?;
     let pipeline = Pipeline::new(fs_hz, config)?;
+    let mut planner = RealFftPlanner::new();
     let variational = trials
         .iter()
-        .map(|t| pipeline.variational(t, admittance))
+        .map(|t| pipeline.variational(&mut planner, t, admittance))
         .collect::<Result<Vec<_>, _>>()?;
     let rows_per_trial = 2 * pipeline.n_est;
     let n_rows = rows_per_trial * trials.len();
@@ -540,7 +552,8 @@ mod tests {
             .collect();
         for deriv in [0, 3] {
             let direct = savgol_filter(&y, 253, 5, deriv, 1.0 / 4000.0, EdgeMode::Interp).unwrap();
-            let fft = savgol_fft(&y, 253, 5, deriv, 1.0 / 4000.0).unwrap();
+            let fft =
+                savgol_fft(&mut RealFftPlanner::new(), &y, 253, 5, deriv, 1.0 / 4000.0).unwrap();
             let scale = direct.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
             for (a, b) in direct.iter().zip(&fft) {
                 assert!((a - b).abs() <= 1e-9 * scale, "deriv {deriv}: {a} vs {b}");
