@@ -125,12 +125,14 @@ impl Recorder {
     }
 }
 
+/// `v` rounded to a multiple of `quantum` (a negative power of ten), as the double
+/// nearest to that decimal, so that its shortest text is the short decimal: `n / 10^k`
+/// with `10^k` exact is one correctly rounded division, the same double that parsing
+/// `"n e-k"` gives.
 fn round_to(v: f64, quantum: f64) -> f64 {
-    let r = (v / quantum).round() * quantum;
-    // Print the shortest text: re-parse the decimal rendering of the rounded value.
-    let decimals = (-quantum.log10()).ceil().max(0.0) as usize;
+    let inv = (1.0 / quantum).round();
     // Adding 0.0 turns a negative zero into zero.
-    format!("{r:.decimals$}").parse().unwrap_or(r) + 0.0
+    (v * inv).round() / inv + 0.0
 }
 
 /// Which columns a trial table gets.
