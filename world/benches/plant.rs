@@ -31,6 +31,30 @@ fn plant(c: &mut Criterion) {
             black_box(frame)
         })
     });
+    // The same step without rapier's stabilisation pass and joint warm-start, to show
+    // what the chosen settings cost (the crate docs give its accuracy).
+    let mut cheap = cfg.clone();
+    cheap.solver.stabilization_iterations = 0;
+    cheap.solver.warmstart_joints = false;
+    let mut rig2 = SimRig::with_seed(cheap, 1).unwrap();
+    let mut k = 0u64;
+    g.bench_function("rapier_full_no_stabilisation_no_warmstart", |b| {
+        b.iter(|| {
+            let s = ((k % 4000) as f64 * 1.5e-3).sin();
+            rig2.set_arm_torques([0.3 * s, -0.2 * s]).unwrap();
+            let frame = rig2.read(Tick(k)).unwrap();
+            rig2.write(
+                Tick(k),
+                MotorCommand {
+                    force_n: [2.0 * s, 3.0 * s],
+                },
+            )
+            .unwrap();
+            rig2.step().unwrap();
+            k += 1;
+            black_box(frame)
+        })
+    });
     let mut red = ReducedPlant::new(&cfg).unwrap();
     let mut k = 0u64;
     g.bench_function("reduced_closed_form", |b| {
