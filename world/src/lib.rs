@@ -54,8 +54,9 @@
 //! through the fixed joint, from the carts' momentum balance over the tick:
 //! `F_x = (m_l Δv_lx + m_u Δv_ux)/dt − F_applied,x`, `F_y = m_u Δv_uy/dt − F_applied,y`.
 //! It therefore contains the handle's inertia like a real sensor:
-//! `F_sensor = F_hand→handle − m_handle · a`. rapier's own joint impulses are not used
-//! (in 0.36 they are the last substep's, in the joint's frame). `tests/accuracy.rs`
+//! `F_sensor = F_hand→handle − m_handle · a`. rapier's own joint impulses are not used:
+//! in 0.36 they are the last substep's, so they match only with one substep or at rest
+//! ([`SimRig::sensor_joint_impulses_n_s`] exposes them for that comparison). `tests/accuracy.rs`
 //! checks the reading against the arm's inverse dynamics through `J⁻ᵀ`.
 //!
 //! ## Plant effects ([`config::PlantEffects`], each off by default)

@@ -8,7 +8,9 @@
 //! constraint, the y-rail, has no y component). This is the step-averaged force of the
 //! handle–cart fixed joint, exact for rapier's integrator, and it contains the handle's
 //! inertia as a real sensor does. rapier's own joint impulses are not used: in 0.36
-//! they are the last substep's, in the joint frame, and lack the warm-start share.
+//! they are the last substep's, so `impulse / (dt / substeps)` equals this reading with
+//! one substep or at rest but not while the load changes within a substepped tick
+//! (`tests/rigio.rs` measures up to 0.44 N apart with four substeps).
 
 use nalgebra::{Matrix2, Vector2};
 use rand::SeedableRng;
@@ -83,6 +85,7 @@ pub struct SimRig {
     lower: RigidBodyHandle,
     upper: RigidBodyHandle,
     handle: RigidBodyHandle,
+    sensor_joint: ImpulseJointHandle,
     arm: Option<ArmLinks>,
     spring_mass: Option<SpringMass>,
     stops: [RailStops; 2],
@@ -166,7 +169,7 @@ impl SimRig {
         );
         // The force sensor: the handle fixed on the upper cart (translation rows; the
         // rotation row is again redundant).
-        world.impulse_joints.insert(
+        let sensor_joint = world.impulse_joints.insert(
             upper,
             handle,
             GenericJointBuilder::new(JointAxesMask::LIN_X | JointAxesMask::LIN_Y),
@@ -281,6 +284,7 @@ impl SimRig {
             lower,
             upper,
             handle,
+            sensor_joint,
             arm,
             spring_mass,
             stops,
@@ -466,6 +470,19 @@ impl SimRig {
             }
         }
         r
+    }
+
+    /// rapier's own linear impulses of the sensor joint after the last step, N s, in the
+    /// joint frame (= rig axes here). Diagnostic only: in rapier 0.36 these are the last
+    /// substep's accumulated impulses, so `impulse / (dt / substeps)` approximates the
+    /// force only when the load is steady; the sensor reading does not use them
+    /// (`tests/rigio.rs` compares the two).
+    #[must_use]
+    pub fn sensor_joint_impulses_n_s(&self) -> [f64; 2] {
+        self.world
+            .impulse_joints
+            .get(self.sensor_joint)
+            .map_or([0.0; 2], |j| [j.impulses[0], j.impulses[1]])
     }
 
     /// Ground truth of the last step.

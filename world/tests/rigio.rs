@@ -190,3 +190,57 @@ fn bad_input_is_an_error_naming_it() {
     }
     assert!(matches!(SimRig::with_seed(cfg, 1), Err(WorldError::Arm(_))));
 }
+
+/// rapier's joint impulses against the momentum-balance reading under a push, for 1 and
+/// 4 substeps: pins the rapier 0.36 trap. The impulse is the last substep's, so
+/// impulse/(dt/substeps) is the sensor force with one substep (always) or at rest, but
+/// not while the load changes within a tick split into substeps.
+#[test]
+fn rapier_joint_impulses_are_per_substep_and_match_the_reading_only_with_one_substep_or_at_rest() {
+    for substeps in [1usize, 4] {
+        let mut cfg = common::arm_config(Grasp::Held);
+        cfg.solver.substeps = substeps;
+        let mut rig = SimRig::with_seed(cfg, 1).unwrap();
+        let q0 = rig.arm_state().unwrap().q;
+        let h = TICK_S / substeps as f64;
+        let mut worst_moving = 0.0f64;
+        for k in 0..16000u64 {
+            let s = rig.arm_state().unwrap();
+            let tau = [
+                -30.0 * (s.q[0] - q0[0]) - 3.0 * s.qd[0],
+                -30.0 * (s.q[1] - q0[1]) - 3.0 * s.qd[1],
+            ];
+            rig.set_arm_torques(tau).unwrap();
+            rig.write(
+                Tick(k),
+                MotorCommand {
+                    force_n: [4.0, -3.0],
+                },
+            )
+            .unwrap();
+            rig.step().unwrap();
+            let imp = rig.sensor_joint_impulses_n_s();
+            let f = rig.truth().sensor_n;
+            if k < 400 {
+                worst_moving = worst_moving.max((imp[0] / h - f[0]).abs());
+            }
+        }
+        let imp = rig.sensor_joint_impulses_n_s();
+        let f = rig.truth().sensor_n;
+        println!(
+            "substeps {substeps}: at rest impulse/(dt/substeps) = [{:.4}, {:.4}] N vs reading [{:.4}, {:.4}] N; while moving up to {worst_moving:.3} N apart",
+            imp[0] / h,
+            imp[1] / h,
+            f[0],
+            f[1]
+        );
+        // At rest both equal the motor force in magnitude (the sign is rapier's joint-frame
+        // convention); 1 % because the impulse is one substep's solve.
+        for axis in 0..2 {
+            assert!(
+                ((imp[axis] / h).abs() - f[axis].abs()).abs() < 0.01 * f[axis].abs().max(1.0),
+                "{imp:?} {f:?}"
+            );
+        }
+    }
+}
