@@ -480,11 +480,34 @@ pub fn estimate_involuntary_impedance(
     check_admittance(admittance)?;
     check_finite_mat2("M_BSP", m_bsp_kg)?;
     let pipeline = Pipeline::new(fs_hz, config)?;
-    let mut planner = RealFftPlanner::new();
-    let variational = trials
-        .iter()
-        .map(|t| pipeline.variational(&mut planner, t, admittance))
-        .collect::<Result<Vec<_>, _>>()?;
+    // Trials are independent: split them over the available cores, keep their
+    // order (and so the first error and the result) exactly as sequential.
+    let n_threads = std::thread::available_parallelism()
+        .map_or(1, std::num::NonZeroUsize::get)
+        .clamp(1, trials.len());
+    let chunk = trials.len().div_ceil(n_threads);
+    let variational = std::thread::scope(|scope| {
+        let handles: Vec<_> = trials
+            .chunks(chunk)
+            .map(|part| {
+                let pipeline = &pipeline;
+                scope.spawn(move || {
+                    let mut planner = RealFftPlanner::new();
+                    part.iter()
+                        .map(|t| pipeline.variational(&mut planner, t, admittance))
+                        .collect::<Result<Vec<_>, _>>()
+                })
+            })
+            .collect();
+        let mut out = Vec::with_capacity(trials.len());
+        for h in handles {
+            match h.join() {
+                Ok(part) => out.extend(part?),
+                Err(payload) => std::panic::resume_unwind(payload),
+            }
+        }
+        Ok::<_, EstimateError>(out)
+    })?;
     let rows_per_trial = 2 * pipeline.n_est;
     let n_rows = rows_per_trial * trials.len();
     let mut a = Vec::with_capacity(n_rows * 7);
