@@ -4,13 +4,16 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use rigtwin::protocol::{EstimateConfig, EstimateMode};
-use rigtwin::report::borner_on_session;
+use rigtwin::report::{borner_on_session, estimate::push_onsets, piovesan_on_session};
 use rigtwin::session::Session;
 
-/// Estimate the involuntary impedance (Börner et al., 000_*) of a session's force-pulse
-/// trials: Savitzky-Golay jerk, 1 Hz high-pass, 150 ms window, least squares for D
-/// and a symmetric K with the subject's endpoint inertia (default arm rescaled to the
-/// manifest's segment lengths, at each onset posture) as the a-priori M_BSP.
+/// Estimate impedance from a session's perturbed trials. Force-pulse trials: the
+/// involuntary impedance of Börner et al. (000_*): Savitzky-Golay jerk, 1 Hz high-pass,
+/// 150 ms window, least squares for D and a symmetric K with the subject's endpoint
+/// inertia (default arm rescaled to the manifest's segment lengths, at each onset
+/// posture) as the a-priori M_BSP. Trials with position perturbations (`pert_x_m`,
+/// `pert_y_m` columns, as rigtwin's hold protocols record them): the windowed K/B
+/// regression of Piovesan et al. (001_*), 10-cycle windows, two perturbations a cycle.
 #[derive(Debug, clap::Args)]
 #[command(after_help = "\
 Examples:
@@ -36,6 +39,68 @@ pub struct Args {
     /// How variational signals are formed: `seed` (as 000_* writes it) or `consistent`.
     #[arg(long, value_name = "MODE", default_value = "seed", value_parser = ["seed", "consistent"])]
     pub mode: String,
+
+    /// Windowed regression: isotropic inertia moved with the handle besides the handle
+    /// itself, kg (e.g. 1.87 for the 001_* calibration rig). Default: the subject's
+    /// arm endpoint inertia at the trial's start.
+    #[arg(long, value_name = "KG")]
+    pub m_hat_kg: Option<f64>,
+}
+
+fn run_piovesan(args: &Args, session: &Session) -> anyhow::Result<()> {
+    if let Some(m) = args.m_hat_kg
+        && !(m.is_finite() && m >= 0.0)
+    {
+        anyhow::bail!("--m-hat-kg must be >= 0, got {m}");
+    }
+    let trials = piovesan_on_session(session, args.m_hat_kg)
+        .with_context(|| format!("estimating {}", args.session.display()))?;
+    if args.json {
+        let rows: Vec<serde_json::Value> = trials
+            .iter()
+            .map(|t| match t {
+                Ok(t) => serde_json::to_value(t).unwrap_or(serde_json::Value::Null),
+                Err(e) => serde_json::json!({ "error": e }),
+            })
+            .collect();
+        let out = serde_json::json!({
+            "session": args.session.display().to_string(),
+            "method": "piovesan-windowed-regression",
+            "trials": rows,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!(
+        "session    {} ({}, subject {}, {:.0} Hz)",
+        args.session.display(),
+        session.manifest.source.as_str(),
+        session.manifest.subject.id,
+        session.manifest.rate_hz
+    );
+    println!("method     Piovesan windowed regression (mean over 10-cycle windows)");
+    println!(
+        "trial  pushes  windows      K11      K12      K21      K22 [N/m]    B11    B22 [N s/m]    r²"
+    );
+    for t in &trials {
+        match t {
+            Ok(t) => println!(
+                "{:5}  {:6}  {:7}  {:7.1}  {:7.1}  {:7.1}  {:7.1}      {:6.2} {:6.2}         {:.3}",
+                t.id,
+                t.perturbations,
+                t.windows,
+                t.k_n_per_m[0][0],
+                t.k_n_per_m[0][1],
+                t.k_n_per_m[1][0],
+                t.k_n_per_m[1][1],
+                t.b_ns_per_m[0][0],
+                t.b_ns_per_m[1][1],
+                t.r2
+            ),
+            Err(e) => println!("{e}"),
+        }
+    }
+    Ok(())
 }
 
 fn mat(m: &[[f64; 2]; 2], se: &[[f64; 2]; 2]) -> [String; 2] {
@@ -61,6 +126,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
+    let has_pulses = session
+        .manifest
+        .trials
+        .iter()
+        .any(|t| t.perturbation.is_some());
+    if !has_pulses && session.trials.iter().any(|t| !push_onsets(t).is_empty()) {
+        return run_piovesan(args, &session);
+    }
     let config = EstimateConfig {
         t_est_s: args.t_est_s,
         high_pass_hz: args.high_pass_hz,

@@ -20,8 +20,10 @@ use crate::session::{Manifest, PerturbationKind, Session, Trial};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum SessionEstimateError {
-    /// No trial has a force-pulse perturbation.
-    #[error("no trial has a force-pulse perturbation: nothing to estimate")]
+    /// No trial has a perturbation the estimator uses.
+    #[error(
+        "no trial has a force-pulse (or, for the windowed regression, a position) perturbation: nothing to estimate"
+    )]
     NoPerturbedTrials,
     /// The subject's arm cannot be built from the manifest.
     #[error("subject arm from the manifest: {0}")]
@@ -177,4 +179,124 @@ pub fn borner_on_session(
     let n = trials.len() as f64;
     let m_bsp = m_sum.map(|row| row.map(|v| v / n));
     borner(&trials, m.rate_hz, &admittance_of(m), &m_bsp, config)
+}
+
+/// The windowed regression (001_*) of one hold trial: window estimates averaged.
+#[derive(Debug, Clone, Serialize)]
+pub struct PiovesanTrial {
+    /// Trial id.
+    pub id: u32,
+    /// Position perturbations found.
+    pub perturbations: usize,
+    /// Windows estimated.
+    pub windows: usize,
+    /// Mean `K` over windows, N/m.
+    pub k_n_per_m: Mat2,
+    /// Mean `B` over windows, N s/m.
+    pub b_ns_per_m: Mat2,
+    /// Mean canonical r².
+    pub r2: f64,
+}
+
+/// Onsets of the position perturbations of a table, from its `pert_x_m, pert_y_m`
+/// columns: rows where the offset leaves zero.
+#[must_use]
+pub fn push_onsets(table: &Trial) -> Vec<usize> {
+    let (Some(px), Some(py)) = (table.column("pert_x_m"), table.column("pert_y_m")) else {
+        return Vec::new();
+    };
+    let off = |i: usize| px[i] != 0.0 || py[i] != 0.0;
+    (0..px.len().min(py.len()))
+        .filter(|&i| off(i) && (i == 0 || !off(i - 1)))
+        .collect()
+}
+
+/// The windowed regression of 001_* on every trial with position perturbations
+/// (`pert_x_m, pert_y_m` columns). Perturbations are taken to come twice per cycle,
+/// as in 001_*, so perturbation `i` belongs to cycle `i / 2`; windows are 10 cycles.
+/// `M̂` is `m_hat_kg` (isotropic) when given, else the subject's arm endpoint inertia
+/// at the trial's first position plus the handle mass.
+///
+/// # Errors
+/// [`SessionEstimateError::NoPerturbedTrials`] without position perturbations; arm
+/// errors when `M̂` comes from the arm.
+pub fn piovesan_on_session(
+    session: &Session,
+    m_hat_kg: Option<f64>,
+) -> Result<Vec<Result<PiovesanTrial, String>>, SessionEstimateError> {
+    use rigtwin_device::estimate::{
+        ImposedMotionTrial, PiovesanConfig, PositionPerturbation, windowed_impedance,
+    };
+    let m = &session.manifest;
+    let h = m.device.handle_mass_kg.unwrap_or(0.0);
+    let defaults = ArmParams::default();
+    let arm = ArmParams::with_lengths(
+        m.subject.upper_arm_m.unwrap_or(defaults.upper.length_m),
+        m.subject.forearm_m.unwrap_or(defaults.fore.length_m),
+    )?;
+    let mut out = Vec::new();
+    for (entry, table) in session.iter() {
+        let onsets = push_onsets(table);
+        if onsets.is_empty() {
+            continue;
+        }
+        let m_hat = match m_hat_kg {
+            Some(mk) => [[mk + h, 0.0], [0.0, mk + h]],
+            None => {
+                let hand = [table.x_m[0], table.y_m[0]];
+                let mi = endpoint_inertia(&arm, m.subject.shoulder_m, hand)?;
+                [[mi[0][0] + h, mi[0][1]], [mi[1][0], mi[1][1] + h]]
+            }
+        };
+        let pushes: Vec<PositionPerturbation> = onsets
+            .iter()
+            .enumerate()
+            .map(|(i, &onset_index)| PositionPerturbation {
+                onset_index,
+                cycle: i / 2,
+            })
+            .collect();
+        let n_cycles = pushes.len().div_ceil(2);
+        let config = PiovesanConfig {
+            window_cycles: PiovesanConfig::default().window_cycles.min(n_cycles),
+            ..PiovesanConfig::default()
+        };
+        let fx: Vec<f64> = table.fx_n.iter().map(|v| -v).collect();
+        let fy: Vec<f64> = table.fy_n.iter().map(|v| -v).collect();
+        let trial = ImposedMotionTrial {
+            x_m: [&table.x_m, &table.y_m],
+            force_n: [&fx, &fy],
+            perturbations: &pushes,
+            n_cycles,
+        };
+        out.push(
+            windowed_impedance(&trial, m.rate_hz, &m_hat, &config)
+                .map_err(|e| format!("trial {}: {e}", entry.id))
+                .map(|w| {
+                    let n = w.len().max(1) as f64;
+                    let mut k = [[0.0; 2]; 2];
+                    let mut b = [[0.0; 2]; 2];
+                    for e in &w {
+                        for r in 0..2 {
+                            for c in 0..2 {
+                                k[r][c] += e.k_n_per_m[r][c] / n;
+                                b[r][c] += e.b_ns_per_m[r][c] / n;
+                            }
+                        }
+                    }
+                    PiovesanTrial {
+                        id: entry.id,
+                        perturbations: pushes.len(),
+                        windows: w.len(),
+                        k_n_per_m: k,
+                        b_ns_per_m: b,
+                        r2: w.iter().map(|e| e.canonical_r2).sum::<f64>() / n,
+                    }
+                }),
+        );
+    }
+    if out.is_empty() {
+        return Err(SessionEstimateError::NoPerturbedTrials);
+    }
+    Ok(out)
 }

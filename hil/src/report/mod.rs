@@ -13,7 +13,10 @@ use serde::Serialize;
 
 use crate::protocol::ProtocolKind;
 use crate::rehearse::{Rehearsal, TrialTask, TwinTruth};
-pub use estimate::{BornerResult, SessionEstimateError, borner, borner_on_session};
+pub use estimate::{
+    BornerResult, PiovesanTrial, SessionEstimateError, borner, borner_on_session,
+    piovesan_on_session,
+};
 pub use render::{markdown, summary_text};
 
 /// Mean and sample standard deviation.
