@@ -6,3 +6,7 @@ pub mod rehearse;
 pub mod replay;
 pub mod report;
 pub mod session;
+
+/// Visual debugging in the rerun viewer (`--rerun`).
+#[cfg(feature = "rerun")]
+pub mod viz;

@@ -9,6 +9,8 @@ use clap::{Parser, Subcommand};
 pub mod diagnose;
 pub mod estimate;
 pub mod inspect;
+#[cfg(feature = "rerun")]
+pub mod view;
 pub mod rehearse;
 
 /// rigtwin: a hardware-in-the-loop co-simulation of a planar haptic manipulandum and
@@ -33,6 +35,9 @@ pub struct Cli {
 pub enum Command {
     /// Summarise a recorded session: manifest, channels, one line per trial.
     Inspect(inspect::Args),
+    /// Show a recorded session in the rerun viewer (live, or saved to an .rrd).
+    #[cfg(feature = "rerun")]
+    View(view::Args),
     /// Rehearse a protocol against virtual subjects: sessions plus a report.
     Rehearse(rehearse::Args),
     /// Estimate impedance from a session's perturbed trials (measured or simulated).
@@ -48,6 +53,8 @@ pub enum Command {
 pub fn run(cli: &Cli) -> anyhow::Result<()> {
     match &cli.command {
         Command::Inspect(args) => inspect::run(args),
+        #[cfg(feature = "rerun")]
+        Command::View(args) => view::run(args),
         Command::Rehearse(args) => rehearse::run(args),
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),

@@ -1,0 +1,168 @@
+//! A recorded session (measured or simulated) in the viewer: the glue between
+//! [`crate::session::Session`] and the column API of [`Viewer`].
+
+use sha2::{Digest as _, Sha256};
+
+use super::columns::{PerturbationMeta, PerturbationSize, RigGeometry, TrialColumns, TrialMeta};
+use super::geometry::{Elbow, two_link_inverse};
+use super::{ArmColumns, EventLevel, Viewer, VizError};
+use crate::session::{Amplitude, MANIFEST_FILE, Session};
+
+/// Extra trial columns with the arm's joint angles, rad (shoulder from +x toward +y, elbow
+/// relative to the upper arm). A simulated session that records them is drawn from them;
+/// otherwise the arm is solved from the handle path by inverse kinematics.
+pub const ARM_ANGLE_COLUMNS: [&str; 2] = ["shoulder_rad", "elbow_rad"];
+
+/// The workspace drawn when the manifest does not give one, m.
+const DEFAULT_WORKSPACE_HALF_WIDTH_M: f64 = 0.15;
+
+/// What was sent.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Logged {
+    /// Trials logged.
+    pub trials: usize,
+    /// Samples logged, all trials.
+    pub samples: usize,
+    /// Perturbed trials.
+    pub perturbed: usize,
+    /// Whether the arm was drawn (segment lengths or joint angles known).
+    pub arm: bool,
+    /// Samples whose hand position the arm cannot reach (drawn stretched).
+    pub out_of_reach: usize,
+}
+
+/// A recording id that is a function of the session: the subject and the first 16 hex
+/// digits of the SHA-256 of `session.toml` (which holds every trial file's digest). The same
+/// session replaces itself in a running viewer, and saved files are reproducible.
+pub fn recording_id(session: &Session) -> Result<String, VizError> {
+    let path = session.dir.join(MANIFEST_FILE);
+    let bytes = std::fs::read(&path).map_err(|source| VizError::Io { path, source })?;
+    let digest = Sha256::digest(&bytes);
+    let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
+    Ok(format!("{}-{hex}", session.manifest.subject.id))
+}
+
+/// Logs a whole session: rig geometry, every trial in manifest order with its arm, and a
+/// summary event.
+pub fn log_session(viewer: &mut Viewer, session: &Session) -> Result<Logged, VizError> {
+    let manifest = &session.manifest;
+    let subject = &manifest.subject;
+    let workspace = manifest
+        .device
+        .workspace_half_width_m
+        .unwrap_or(DEFAULT_WORKSPACE_HALF_WIDTH_M);
+    viewer.log_rig_geometry(
+        &RigGeometry::with_workspace(workspace).with_shoulder(subject.shoulder_m),
+    )?;
+    let segments = subject.upper_arm_m.zip(subject.forearm_m);
+    let mut logged = Logged::default();
+
+    for (index, (entry, trial)) in session.iter().enumerate() {
+        let meta = TrialMeta {
+            trial_index: u32::try_from(index).unwrap_or(u32::MAX),
+            id: entry.id,
+            kind: entry.kind.as_str().to_owned(),
+            rate_hz: manifest.rate_hz,
+            start_m: entry.start_m,
+            goal_m: entry.goal_m,
+            perturbation: entry.perturbation.as_ref().map(|p| PerturbationMeta {
+                onset_s: p.onset_s,
+                duration_s: p.duration_s,
+                size: match p.amplitude {
+                    Amplitude::ForceN(n) => PerturbationSize::ForceN(n),
+                    Amplitude::PositionM(m) => PerturbationSize::PositionM(m),
+                },
+                angle_deg: p.angle_deg,
+            }),
+        };
+        let columns = TrialColumns {
+            vx_m_per_s: trial.vx_m_per_s.as_deref(),
+            vy_m_per_s: trial.vy_m_per_s.as_deref(),
+            ref_x_m: trial.ref_x_m.as_deref(),
+            ref_y_m: trial.ref_y_m.as_deref(),
+            cmd_fx_n: trial.cmd_fx_n.as_deref(),
+            cmd_fy_n: trial.cmd_fy_n.as_deref(),
+            ..TrialColumns::required(
+                &trial.t_s,
+                &trial.x_m,
+                &trial.y_m,
+                &trial.fx_n,
+                &trial.fy_n,
+                &trial.pert_fx_n,
+                &trial.pert_fy_n,
+            )
+        };
+        let span = viewer.log_trial(&meta, &columns)?;
+        logged.trials += 1;
+        logged.samples += trial.len();
+        logged.perturbed += usize::from(meta.perturbation.is_some());
+
+        let angles = trial
+            .column(ARM_ANGLE_COLUMNS[0])
+            .zip(trial.column(ARM_ANGLE_COLUMNS[1]));
+        match (angles, segments) {
+            (Some((q1, q2)), Some((l1, l2))) => {
+                let s = subject.shoulder_m;
+                let elbow_x: Vec<f64> = q1.iter().map(|q| s[0] + l1 * q.cos()).collect();
+                let elbow_y: Vec<f64> = q1.iter().map(|q| s[1] + l1 * q.sin()).collect();
+                let reach = |e: &[f64], f: fn(f64) -> f64| -> Vec<f64> {
+                    e.iter()
+                        .zip(q1.iter().zip(q2))
+                        .map(|(e, (a, b))| e + l2 * f(a + b))
+                        .collect()
+                };
+                let hand_x = reach(&elbow_x, f64::cos);
+                let hand_y = reach(&elbow_y, f64::sin);
+                let arm = ArmColumns {
+                    shoulder_m: s,
+                    elbow_x_m: &elbow_x,
+                    elbow_y_m: &elbow_y,
+                    hand_x_m: &hand_x,
+                    hand_y_m: &hand_y,
+                    shoulder_rad: q1,
+                    elbow_rad: q2,
+                };
+                viewer.log_arm(&span, &trial.t_s, &arm)?;
+                logged.arm = true;
+            }
+            (None, Some((l1, l2))) => {
+                let arm = two_link_inverse(
+                    subject.shoulder_m,
+                    l1,
+                    l2,
+                    &trial.x_m,
+                    &trial.y_m,
+                    Elbow::Right,
+                );
+                logged.out_of_reach += arm.out_of_reach;
+                viewer.log_arm(&span, &trial.t_s, &arm.columns())?;
+                logged.arm = true;
+            }
+            (_, None) => {}
+        }
+    }
+
+    let end = viewer.stamp_at(viewer.next_trial_offset_s());
+    let mut text = format!(
+        "session {} ({}, {} trials, {} perturbed, {:.0} Hz)",
+        subject.id,
+        manifest.source.as_str(),
+        logged.trials,
+        logged.perturbed,
+        manifest.rate_hz
+    );
+    if !logged.arm {
+        text.push_str("; arm not drawn: the manifest gives no segment lengths");
+    }
+    let level = if logged.out_of_reach > 0 {
+        text.push_str(&format!(
+            "; {} samples out of the arm's reach (drawn stretched)",
+            logged.out_of_reach
+        ));
+        EventLevel::Warn
+    } else {
+        EventLevel::Info
+    };
+    viewer.log_event(end, level, &text)?;
+    Ok(logged)
+}
