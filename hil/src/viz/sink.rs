@@ -50,18 +50,16 @@ pub(crate) fn store_source() -> StoreSource {
     StoreSource::Other(format!("rigtwin {}", env!("CARGO_PKG_VERSION")))
 }
 
-/// An encoder without the optional footer: rerun 0.36 writes the footer's per-store
-/// manifests from a `HashMap`, so with two stores (the recording and its blueprint) their
-/// order, and the file's last bytes, change from run to run. The viewer does not need the
-/// footer (it speeds up random access to large files; `rerun rrd optimize` adds one).
+/// rerun's encoder with its footer (the per-store manifests that `rerun rrd verify` and
+/// random access want). rerun 0.36 writes those manifests from a `HashMap`, so with two
+/// stores (the recording and its blueprint) their order in the footer, and only there, can
+/// differ between two saves; every message before it is the same bytes.
 fn encoder<W: std::io::Write>(write: W) -> Result<Encoder<W>, VizError> {
-    let mut encoder = Encoder::new_eager(
+    Ok(Encoder::new_eager(
         CrateVersion::LOCAL,
         EncodingOptions::PROTOBUF_COMPRESSED,
         write,
-    )?;
-    encoder.do_not_emit_footer();
-    Ok(encoder)
+    )?)
 }
 
 impl Sink {

@@ -35,7 +35,8 @@ const TIMELINE_TRIAL: &str = "trial";
 /// Every method sends whole columns (rerun's columnar path, one chunk per entity per call),
 /// never row by row. Chunks are numbered by a counter, the store is stamped with a fixed
 /// source and the given recording id, and nothing reads the clock, so saving the same calls
-/// twice gives the same bytes.
+/// twice gives the same messages, byte for byte; only the order of the two stores' manifests
+/// in the file's footer is rerun's `HashMap` order.
 #[derive(Debug)]
 pub struct Viewer {
     store_id: StoreId,
