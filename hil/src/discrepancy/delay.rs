@@ -2,9 +2,12 @@
 //!
 //! Every rig has some latency between the logged command and the force (compute tick,
 //! zero-order hold of the 2 kHz motor update, the logging convention). The baseline
-//! therefore fits its own latency within [`NOMINAL_LATENCY_MAX_S`] (one motor update
-//! plus one control tick), and this candidate reports the delay **beyond** that. The
-//! search is over a grid of lags at a quarter of a 4 kHz tick; between samples the
+//! therefore fits its own latency within [`NOMINAL_LATENCY_MAX_S`] (two control ticks),
+//! and this candidate reports the delay **beyond** the baseline's. When a hidden delay
+//! is present the baseline's latency sits at that bound, so the report is the lag in
+//! excess of a two-tick nominal rig; a rig whose own latency is shorter (the shared
+//! emulated rig: 0.33 ms) gets its delay underestimated by the difference (≤ 0.5 ms).
+//! The search is over a grid of lags at a tenth of a 4 kHz tick; between samples the
 //! command is interpolated linearly.
 
 use super::candidate::{Candidate, push_rows, residual_rows};
@@ -12,8 +15,10 @@ use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
 
-/// Largest latency a nominal rig may have, s: one 2 kHz motor period plus one 4 kHz tick.
-pub const NOMINAL_LATENCY_MAX_S: f64 = 0.75e-3;
+/// Largest latency a nominal rig may have, s: two 4 kHz ticks — the command computed at
+/// tick k acts from tick k + 1, and the 2 kHz zero-order hold adds half a motor period
+/// (one tick) on average.
+pub const NOMINAL_LATENCY_MAX_S: f64 = 0.5e-3;
 /// Largest actuation delay searched, s. Far beyond it the stiff position loop of an
 /// admittance rig could not stay stable.
 pub const MAX_DELAY_S: f64 = 25e-3;
@@ -37,7 +42,7 @@ impl ActuationDelay {
         }
     }
 
-    /// The nominal latency search of the baseline: 0–0.75 ms in 25 µs steps.
+    /// The nominal latency search of the baseline: 0–0.5 ms in 25 µs steps.
     #[must_use]
     pub fn nominal() -> Self {
         ActuationDelay {

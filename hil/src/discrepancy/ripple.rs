@@ -8,8 +8,8 @@
 //! points that both miss it. For each pitch the amplitude and phase are linear
 //! (`sin`, `cos` columns), shared by both axes as in the catalog law. The sinusoids are
 //! evaluated on the smoothed position without smoothing them again: at the speeds of a
-//! reach (< 0.2 m/s) and pitches above 3 mm the ripple stays below ~60 Hz, where the
-//! smoothing passes it.
+//! reach (mostly < 0.15 m/s) and pitches above 5 mm the ripple stays below ~30 Hz,
+//! where the smoothing passes it.
 
 use std::f64::consts::TAU;
 
@@ -19,7 +19,7 @@ use super::gram::Gram;
 use super::signals::BalanceSignals;
 
 /// Shortest pitch searched, m.
-pub const MIN_PITCH_M: f64 = 3e-3;
+pub const MIN_PITCH_M: f64 = 5e-3;
 /// Longest pitch searched, m (also at most half the travel: two periods are needed to
 /// tell a ripple from a slow trend).
 pub const MAX_PITCH_M: f64 = 0.1;

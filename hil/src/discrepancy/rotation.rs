@@ -27,11 +27,11 @@ pub struct SensorRotation {
 }
 
 impl Default for SensorRotation {
-    /// ±30° in 0.05° steps: a sensor mounted a screw hole off is 15–30°, a bad
-    /// alignment a few degrees.
+    /// ±45° in 0.05° steps: a sensor mounted a bolt hole off its index is 15–45° off, a
+    /// careless alignment a few degrees.
     fn default() -> Self {
         SensorRotation {
-            max_deg: 30.0,
+            max_deg: 45.0,
             step_deg: 0.05,
         }
     }

@@ -1,7 +1,7 @@
 //! The channels of one trial that the cart force balance needs, smoothed alike.
 //!
 //! Position, velocity and acceleration come from one Savitzky–Golay fit of the
-//! encoder position (cubic, about 21 ms long); the motor command and the sensor force
+//! encoder position (cubic, about 41 ms long); the motor command and the sensor force
 //! go through the same smoothing (derivative 0), so that every term of the balance
 //! `m·a = u + F + effects` has passed the same filter and the filter's own lag and
 //! roll-off cancel out of the comparison. Regressors that are nonlinear in the state
@@ -9,7 +9,7 @@
 //! before use ([`BalanceSignals::smooth`]).
 //!
 //! The balance is evaluated on every `decim`-th sample, away from the ends by half a
-//! window: the smoothed signals hold nothing above ~60 Hz, so samples closer than
+//! window: the smoothed signals hold little above ~30 Hz, so samples closer than
 //! ~2 ms carry almost no new information and only cost time.
 
 use rigtwin_device::signal::{EdgeMode, savgol_filter};
@@ -17,9 +17,12 @@ use rigtwin_device::signal::{EdgeMode, savgol_filter};
 use super::error::DiscrepancyError;
 use crate::session::{Trial, TrialEntry};
 
-/// Length of the smoothing window, s. 21 ms with a cubic passes ~60 Hz: enough for the
-/// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 50 Hz.
-pub const SMOOTHING_WINDOW_S: f64 = 0.021;
+/// Length of the smoothing window, s. 41 ms with a cubic passes ~30 Hz: enough for the
+/// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz. A
+/// 21 ms window doubled the nominal balance's residual on the project's plant (the
+/// position loop's jitter and the encoder quantum pass into the acceleration), an 81 ms
+/// one starts to bias the fitted masses (12.9 instead of 12.3 kg).
+pub const SMOOTHING_WINDOW_S: f64 = 0.041;
 /// Polynomial order of the Savitzky–Golay fit.
 pub const SMOOTHING_ORDER: usize = 3;
 /// Rate at which the balance is evaluated, Hz (see the module docs).
