@@ -126,4 +126,6 @@ fn garbage_never_panics() {
     }
     let e = Protocol::load(Path::new("/nonexistent/protocol.toml")).unwrap_err();
     assert!(e.to_string().contains("/nonexistent/protocol.toml"), "{e}");
+    // The I/O cause is the error's source (printed once by the command's error chain).
+    assert!(std::error::Error::source(&e).is_some());
 }

@@ -17,7 +17,7 @@ pub struct InvalidKey {
 #[non_exhaustive]
 pub enum ProtocolError {
     /// The file could not be read.
-    #[error("cannot read protocol {path}: {source}")]
+    #[error("cannot read protocol {path}")]
     Read {
         /// The file.
         path: PathBuf,
