@@ -6,6 +6,7 @@
 
 use clap::{Parser, Subcommand};
 
+pub mod compare;
 pub mod diagnose;
 pub mod estimate;
 pub mod inspect;
@@ -44,6 +45,8 @@ pub enum Command {
     Estimate(estimate::Args),
     /// Name the plant effect the nominal model misses in a measured session.
     Diagnose(diagnose::Args),
+    /// Replay a session in simulation: error per channel and phase.
+    Compare(compare::Args),
 }
 
 /// Runs the parsed command line.
@@ -58,5 +61,6 @@ pub fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Rehearse(args) => rehearse::run(args),
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),
+        Command::Compare(args) => compare::run(args),
     }
 }

@@ -58,6 +58,14 @@ pub enum DiscrepancyError {
         /// Why.
         reason: String,
     },
+    /// A session could not be replayed in simulation.
+    #[error("replaying trial {trial}: {reason}")]
+    Replay {
+        /// Trial id (0 for the whole session).
+        trial: u32,
+        /// Why.
+        reason: String,
+    },
     /// A model file could not be made or read.
     #[error("model file {path}: {reason}")]
     Model {

@@ -12,6 +12,7 @@
 //! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
 //! | `model.rs` | the extended model as TOML (`--write-model`) |
 //! | `plots.rs` | the PNG figures of `diagnosis.md` |
+//! | `replay.rs` | `compare`: the session replayed in simulation, error per channel and phase |
 //! | `report.rs` | the table a person reads and `diagnosis.md` |
 
 mod candidate;
@@ -23,6 +24,7 @@ mod friction;
 mod gram;
 mod model;
 pub mod plots;
+mod replay;
 mod report;
 mod ripple;
 mod rotation;
@@ -46,3 +48,4 @@ pub use rotation::SensorRotation;
 pub use signals::{
     BalanceSignals, EVALUATION_RATE_HZ, SMOOTHING_ORDER, SMOOTHING_WINDOW_S, window_for_rate,
 };
+pub use replay::{ChannelError, Comparison, RESPONSE_WINDOW_S, compare};
