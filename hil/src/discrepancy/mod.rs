@@ -42,10 +42,10 @@ pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
 pub use gram::Gram;
 pub use model::ExtendedModel;
+pub use replay::{ChannelError, Comparison, RESPONSE_WINDOW_S, compare};
 pub use report::{table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;
 pub use signals::{
     BalanceSignals, EVALUATION_RATE_HZ, SMOOTHING_ORDER, SMOOTHING_WINDOW_S, window_for_rate,
 };
-pub use replay::{ChannelError, Comparison, RESPONSE_WINDOW_S, compare};
