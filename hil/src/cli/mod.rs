@@ -10,9 +10,9 @@ pub mod compare;
 pub mod diagnose;
 pub mod estimate;
 pub mod inspect;
+pub mod rehearse;
 #[cfg(feature = "rerun")]
 pub mod view;
-pub mod rehearse;
 
 /// rigtwin: a hardware-in-the-loop co-simulation of a planar haptic manipulandum and
 /// the human arm that holds it.
@@ -36,9 +36,6 @@ pub struct Cli {
 pub enum Command {
     /// Summarise a recorded session: manifest, channels, one line per trial.
     Inspect(inspect::Args),
-    /// Show a recorded session in the rerun viewer (live, or saved to an .rrd).
-    #[cfg(feature = "rerun")]
-    View(view::Args),
     /// Rehearse a protocol against virtual subjects: sessions plus a report.
     Rehearse(rehearse::Args),
     /// Estimate impedance from a session's perturbed trials (measured or simulated).
@@ -47,6 +44,9 @@ pub enum Command {
     Diagnose(diagnose::Args),
     /// Replay a session in simulation: error per channel and phase.
     Compare(compare::Args),
+    /// Show a recorded session in the rerun viewer (live, or saved to an .rrd).
+    #[cfg(feature = "rerun")]
+    View(view::Args),
 }
 
 /// Runs the parsed command line.
@@ -56,11 +56,11 @@ pub enum Command {
 pub fn run(cli: &Cli) -> anyhow::Result<()> {
     match &cli.command {
         Command::Inspect(args) => inspect::run(args),
-        #[cfg(feature = "rerun")]
-        Command::View(args) => view::run(args),
         Command::Rehearse(args) => rehearse::run(args),
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Compare(args) => compare::run(args),
+        #[cfg(feature = "rerun")]
+        Command::View(args) => view::run(args),
     }
 }
