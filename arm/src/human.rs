@@ -86,7 +86,10 @@ pub struct ReachTask {
 }
 
 /// A motion the rig imposes on the hand, known to the subject:
-/// `x(t) = centre + amplitude · sin(2π f (t − t₀))` for t ≥ t₀, the centre before.
+/// `x(t) = centre + e(t) · amplitude · sin(2π f (t − t₀))` for t ≥ t₀, the centre before,
+/// with the device's envelope `e`: a raised-cosine ramp `½(1 − cos(π τ / T_r))` over
+/// `T_r = ramp_s` in, 1 for `cycles` full cycles, the mirror ramp out, then 0 (no ramp
+/// when `ramp_s` is 0; no end when `cycles` is `None`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ImposedSinusoid {
@@ -96,6 +99,54 @@ pub struct ImposedSinusoid {
     pub frequency_hz: f64,
     /// Onset \[tick\].
     pub start_tick: u64,
+    /// Raised-cosine ramp in and out \[s\] (0 = none).
+    #[serde(default)]
+    pub ramp_s: f64,
+    /// Full-amplitude cycles between the ramps (`None` = the motion never ends).
+    #[serde(default)]
+    pub cycles: Option<u32>,
+}
+
+impl ImposedSinusoid {
+    /// Envelope and its first two time derivatives at `t` s since the onset.
+    fn envelope(&self, t: f64) -> (f64, f64, f64) {
+        let r = self.ramp_s.max(0.0);
+        let full_s = self
+            .cycles
+            .map_or(f64::INFINITY, |n| f64::from(n) / self.frequency_hz);
+        let end = 2.0 * r + full_s;
+        if t < 0.0 || t >= end {
+            return (0.0, 0.0, 0.0);
+        }
+        let ramp = |tau: f64, sign: f64| {
+            let k = std::f64::consts::PI / r;
+            (
+                0.5 * (1.0 - (k * tau).cos()),
+                sign * 0.5 * k * (k * tau).sin(),
+                0.5 * k * k * (k * tau).cos(),
+            )
+        };
+        if t < r {
+            ramp(t, 1.0)
+        } else if t <= r + full_s {
+            (1.0, 0.0, 0.0)
+        } else {
+            ramp(end - t, -1.0)
+        }
+    }
+
+    /// Offset from the centre, its velocity and acceleration at `t` s since the onset.
+    fn offset(&self, t: f64) -> (Vector2<f64>, Vector2<f64>, Vector2<f64>) {
+        let amp = Vector2::new(self.amplitude_m[0], self.amplitude_m[1]);
+        let (e, de, dde) = self.envelope(t);
+        let w = std::f64::consts::TAU * self.frequency_hz;
+        let (s, c) = (w * t).sin_cos();
+        (
+            amp * (e * s),
+            amp * (de * s + e * w * c),
+            amp * (dde * s + 2.0 * de * w * c - e * w * w * s),
+        )
+    }
 }
 
 /// Holding a contact force on the handle (001_*).
@@ -275,7 +326,9 @@ impl Human {
                     .iter()
                     .chain([&h.co_contraction_rise_per_s])
                     .all(|x| x.is_finite())
-                    && h.imposed.is_none_or(|s| s.frequency_hz.is_finite());
+                    && h.imposed.is_none_or(|s| {
+                        s.frequency_hz.is_finite() && s.ramp_s.is_finite() && s.ramp_s >= 0.0
+                    });
                 if !finite {
                     return Err(ArmError::NonFinite { what: "hold task" });
                 }
@@ -376,14 +429,8 @@ impl Human {
         let c = centre - self.shoulder;
         match imposed {
             Some(s) if tick >= s.start_tick => {
-                let amp = Vector2::new(s.amplitude_m[0], s.amplitude_m[1]);
-                let w = std::f64::consts::TAU * s.frequency_hz;
-                let phase = w * ticks_to_s(tick - s.start_tick);
-                (
-                    c + amp * phase.sin(),
-                    amp * (w * phase.cos()),
-                    -amp * (w * w * phase.sin()),
-                )
+                let (x, v, acc) = s.offset(ticks_to_s(tick - s.start_tick));
+                (c + x, v, acc)
             }
             _ => (c, Vector2::zeros(), Vector2::zeros()),
         }

@@ -322,6 +322,8 @@ fn hold_keeps_the_force_on_an_imposed_sinusoid() {
             amplitude_m: [0.05, 0.0],
             frequency_hz: 0.5,
             start_tick: 0,
+            ramp_s: 0.0,
+            cycles: None,
         }),
         co_contraction_rise_per_s: 0.0,
     });

@@ -307,24 +307,19 @@ fn arm_attachment(subject: &VirtualSubject) -> Attachment {
     }
 }
 
-/// The imposed motion as the subject knows it. The controller's motion is
-/// `e(t) A sin(2π f t)` from activation with a raised-cosine envelope `e` over the ramp;
-/// the arm model knows a plain sinusoid, so it is told the full-amplitude part, which
-/// starts when the ramp ends (with the default ramp of half a period, at a zero
-/// crossing, with the phase `sin(2π f T_r)`-shifted sign taken into the amplitude).
+/// The imposed motion as the subject knows it: the controller's own, `e(t) A sin(2π f t)`
+/// from activation (the tick after the handle is placed, centred there) with the same
+/// raised-cosine envelope `e` over the ramp, the full cycles and the ramp out.
 fn human_sinusoid(protocol: &Protocol, axis: Axis) -> ImposedSinusoid {
     let m = &protocol.controller.imposed_motion;
-    let start = 1 + ticks(m.ramp_s);
-    // sin(2π f (t − T_r) + 2π f T_r): at the ramp's end the controller's phase is
-    // 2π f T_r; for T_r a multiple of half a period this is a sign.
-    let phase = 2.0 * core::f64::consts::PI * m.frequency_hz * m.ramp_s;
-    let sign = if phase.cos() >= 0.0 { 1.0 } else { -1.0 };
     let mut amplitude_m = [0.0; 2];
-    amplitude_m[axis.index()] = sign * m.amplitude_m;
+    amplitude_m[axis.index()] = m.amplitude_m;
     ImposedSinusoid {
         amplitude_m,
         frequency_hz: m.frequency_hz,
-        start_tick: start,
+        start_tick: 1,
+        ramp_s: m.ramp_s,
+        cycles: Some(m.cycles),
     }
 }
 
