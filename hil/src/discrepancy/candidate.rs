@@ -49,7 +49,10 @@ pub trait Candidate: Sync + Send {
     /// The force the effect adds to the carts (N) at state `(q, v)` of `axis`, for
     /// plots of the residual against position or velocity; `None` when the effect does
     /// not depend on the state alone.
-    fn effect_force(&self, s: usize, beta: &[f64], axis: usize, q: f64, v: f64) -> Option<f64>;
+    fn effect_force(&self, s: usize, beta: &[f64], axis: usize, q: f64, v: f64) -> Option<f64> {
+        let _ = (s, beta, axis, q, v);
+        None
+    }
     /// The residual of the balance (target minus fit, N) on the evaluated rows of each
     /// axis, at setting `s` with coefficients `beta`.
     ///

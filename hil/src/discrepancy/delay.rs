@@ -93,16 +93,6 @@ impl Candidate for ActuationDelay {
     fn parameters(&self, s: usize, _beta: &[f64], latency_s: f64) -> Vec<(String, f64)> {
         vec![("delay_ms".to_string(), (self.lag_s(s) - latency_s) * 1e3)]
     }
-    fn effect_force(
-        &self,
-        _s: usize,
-        _beta: &[f64],
-        _axis: usize,
-        _q: f64,
-        _v: f64,
-    ) -> Option<f64> {
-        None
-    }
     fn residual(
         &self,
         sig: &BalanceSignals,

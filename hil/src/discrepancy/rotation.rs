@@ -99,16 +99,6 @@ impl Candidate for SensorRotation {
     fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![("angle_deg".to_string(), self.angle_deg(s))]
     }
-    fn effect_force(
-        &self,
-        _s: usize,
-        _beta: &[f64],
-        _axis: usize,
-        _q: f64,
-        _v: f64,
-    ) -> Option<f64> {
-        None
-    }
     fn residual(
         &self,
         sig: &BalanceSignals,
