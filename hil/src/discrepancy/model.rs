@@ -1,15 +1,22 @@
-//! The extended model that `diagnose --write-model` writes and `compare --model` reads:
-//! the plant effect named as the cause, in the world's own [`PlantEffects`] keys, so
-//! the same table configures `rigtwin_world::RigConfig::effects`.
+//! The extended model that `diagnose --write-model` writes and `compare --model` and
+//! `rehearse --model` read: the effect named as the cause, in the world's own
+//! [`PlantEffects`] keys (so the same table configures `rigtwin_world::RigConfig::effects`;
+//! `handle_mass` and `grip_compliance` live there too) and, for `stretch-reflex`, the
+//! arm's own [`StretchReflex`] keys. [`ExtendedModel::apply_to`] puts both into a
+//! protocol.
 
 use std::path::Path;
 
+use rigtwin_arm::params::StretchReflex;
 use rigtwin_world::PlantEffects;
-use rigtwin_world::config::{ActuationDelay, ForceRipple, RailFriction, SensorEffect};
+use rigtwin_world::config::{
+    ActuationDelay, ForceRipple, GripCompliance, HandleMass, RailFriction, SensorEffect,
+};
 use serde::{Deserialize, Serialize};
 
 use super::diagnose::Diagnosis;
 use super::error::DiscrepancyError;
+use crate::protocol::Protocol;
 
 /// A model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -27,6 +34,10 @@ pub struct ExtendedModel {
     pub moving_mass_y_kg: f64,
     /// The effects, as `rigtwin_world::PlantEffects`.
     pub effects: PlantEffects,
+    /// The subject's short-latency stretch reflex (`stretch-reflex`), as
+    /// `rigtwin_arm::params::StretchReflex`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stretch_reflex: Option<StretchReflex>,
 }
 
 fn get(d: &Diagnosis, k: &str) -> Option<f64> {
@@ -39,6 +50,7 @@ impl ExtendedModel {
     #[must_use]
     pub fn from_diagnosis(d: &Diagnosis) -> ExtendedModel {
         let mut effects = PlantEffects::default();
+        let mut stretch_reflex = None;
         match d.cause.as_str() {
             "rail-friction" => {
                 if let (Some(c), Some(b), Some(vs)) = (
@@ -77,6 +89,29 @@ impl ExtendedModel {
                     });
                 }
             }
+            "handle-mass" => {
+                if let Some(kg) = get(d, "extra_mass_kg") {
+                    effects.handle_mass = Some(HandleMass {
+                        extra_mass_kg: kg.max(0.0),
+                    });
+                }
+            }
+            "grip-compliance" => {
+                if let Some(k) = get(d, "stiffness_n_per_m") {
+                    effects.grip_compliance = Some(GripCompliance {
+                        stiffness_n_per_m: k,
+                        damping_n_s_per_m: get(d, "damping_n_s_per_m").unwrap_or(0.0).max(0.0),
+                    });
+                }
+            }
+            "stretch-reflex" => {
+                if let (Some(ms), Some(g)) = (get(d, "delay_ms"), get(d, "gain")) {
+                    stretch_reflex = Some(StretchReflex {
+                        delay_ms: ms.max(0.0),
+                        gain_n_s_per_m: g.max(0.0),
+                    });
+                }
+            }
             _ => {}
         }
         let m = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
@@ -87,6 +122,17 @@ impl ExtendedModel {
             moving_mass_x_kg: m("moving_mass_x_kg"),
             moving_mass_y_kg: m("moving_mass_y_kg"),
             effects,
+            stretch_reflex,
+        }
+    }
+
+    /// Puts the model into a protocol: its plant effects replace the protocol's, and a
+    /// fitted stretch reflex replaces the subjects' (the effects the model does not
+    /// name are the nominal ones, off).
+    pub fn apply_to(&self, protocol: &mut Protocol) {
+        protocol.plant.effects = self.effects.clone();
+        if self.stretch_reflex.is_some() {
+            protocol.subjects.arm.stretch_reflex = self.stretch_reflex;
         }
     }
 
