@@ -25,7 +25,7 @@
 
 use core::f64::consts::PI;
 
-use super::{ArmError, Crossing, PerturbationStatus};
+use super::{ArmError, Crossing, Lifecycle, PerturbationStatus};
 use crate::config::{Axis, ForcePulseConfig};
 use crate::time::{Rate, Tick};
 
@@ -79,32 +79,13 @@ pub enum PulseTrigger {
     },
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum State {
-    Idle,
-    Armed {
-        dir: [f64; 2],
-        trigger: PulseTrigger,
-    },
-    Running {
-        dir: [f64; 2],
-        onset: Tick,
-    },
-    Done {
-        onset: Tick,
-    },
-    Aborted {
-        onset: Tick,
-    },
-}
-
 /// The force-pulse generator: arm, trigger, sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForcePulse {
     duration_ticks: u64,
     section_ticks: f64,
     amplitude_n: f64,
-    state: State,
+    state: Lifecycle<PulseTrigger>,
 }
 
 impl ForcePulse {
@@ -116,7 +97,7 @@ impl ForcePulse {
             duration_ticks,
             section_ticks: duration_ticks as f64 / 3.0,
             amplitude_n: config.amplitude_n,
-            state: State::Idle,
+            state: Lifecycle::Idle,
         }
     }
 
@@ -149,73 +130,42 @@ impl ForcePulse {
     /// # Errors
     /// [`ArmError`] for a non-finite angle or line, or while a pulse is running.
     pub fn arm(&mut self, angle_rad: f64, trigger: PulseTrigger) -> Result<(), ArmError> {
-        if !angle_rad.is_finite() {
-            return Err(ArmError::NonFiniteAngle);
-        }
         if let PulseTrigger::LineCrossing { position_m, .. } = trigger
             && !position_m.is_finite()
         {
             return Err(ArmError::NonFiniteLine);
         }
-        if matches!(self.state, State::Running { .. }) {
-            return Err(ArmError::AlreadyRunning);
-        }
-        let (s, c) = angle_rad.sin_cos();
-        self.state = State::Armed {
-            dir: [c, s],
-            trigger,
-        };
-        Ok(())
+        self.state.arm(angle_rad, trigger)
     }
 
     /// Disarm or cut short.
     pub fn abort(&mut self) {
-        self.state = match self.state {
-            State::Running { onset, .. } => State::Aborted { onset },
-            State::Armed { .. } => State::Idle,
-            s => s,
-        };
+        self.state.abort();
     }
 
     /// Status for the recorder.
     #[must_use]
     pub fn status(&self) -> PerturbationStatus {
-        match self.state {
-            State::Idle => PerturbationStatus::Idle,
-            State::Armed { .. } => PerturbationStatus::Armed,
-            State::Running { onset, .. } => PerturbationStatus::Running { onset },
-            State::Done { onset } => PerturbationStatus::Done { onset },
-            State::Aborted { onset } => PerturbationStatus::Aborted { onset },
-        }
+        self.state.status()
     }
 
     /// One active tick: fire the trigger if due, return the force for this tick, N.
     /// `before_m`/`now_m` are the measured positions at the previous and this tick.
     pub fn update(&mut self, now: Tick, before_m: [f64; 2], now_m: [f64; 2]) -> [f64; 2] {
-        if let State::Armed { dir, trigger } = self.state {
-            let fire = match trigger {
-                PulseTrigger::AtTick(t) => now >= t,
-                PulseTrigger::LineCrossing {
-                    axis,
-                    position_m,
-                    direction,
-                } => {
-                    let i = axis.index();
-                    direction.crossed(before_m[i], now_m[i], position_m)
-                }
-            };
-            if fire {
-                self.state = State::Running { dir, onset: now };
+        let due = |trigger| match trigger {
+            PulseTrigger::AtTick(t) => now >= t,
+            PulseTrigger::LineCrossing {
+                axis,
+                position_m,
+                direction,
+            } => {
+                let i = axis.index();
+                direction.crossed(before_m[i], now_m[i], position_m)
             }
+        };
+        match self.state.advance(now, self.duration_ticks, due) {
+            Some((k, dir)) => self.sample(k, dir),
+            None => [0.0; 2],
         }
-        if let State::Running { dir, onset } = self.state {
-            let k = now.0.saturating_sub(onset.0);
-            if k >= self.duration_ticks {
-                self.state = State::Done { onset };
-                return [0.0; 2];
-            }
-            return self.sample(k, dir);
-        }
-        [0.0; 2]
     }
 }

@@ -55,6 +55,97 @@ impl PerturbationStatus {
     }
 }
 
+/// The life of one perturbation generator, shared by the force pulse and the position
+/// perturbation: armed with a direction and a trigger of type `T`, running from its
+/// onset for a fixed number of ticks, then done (or aborted). Plain data: no
+/// allocation, safe inside the tick.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Lifecycle<T> {
+    Idle,
+    Armed { dir: [f64; 2], trigger: T },
+    Running { dir: [f64; 2], onset: Tick },
+    Done { onset: Tick },
+    Aborted { onset: Tick },
+}
+
+impl<T: Copy> Lifecycle<T> {
+    /// Arms along `angle_rad` (rig frame) with `trigger`.
+    pub(crate) fn arm(&mut self, angle_rad: f64, trigger: T) -> Result<(), ArmError> {
+        if !angle_rad.is_finite() {
+            return Err(ArmError::NonFiniteAngle);
+        }
+        if matches!(self, Lifecycle::Running { .. }) {
+            return Err(ArmError::AlreadyRunning);
+        }
+        let (s, c) = angle_rad.sin_cos();
+        *self = Lifecycle::Armed {
+            dir: [c, s],
+            trigger,
+        };
+        Ok(())
+    }
+
+    /// The armed trigger, if armed.
+    pub(crate) fn trigger(&self) -> Option<T> {
+        match *self {
+            Lifecycle::Armed { trigger, .. } => Some(trigger),
+            _ => None,
+        }
+    }
+
+    /// The armed trigger to change, if armed.
+    pub(crate) fn trigger_mut(&mut self) -> Option<&mut T> {
+        match self {
+            Lifecycle::Armed { trigger, .. } => Some(trigger),
+            _ => None,
+        }
+    }
+
+    /// Disarms, or cuts a running perturbation short.
+    pub(crate) fn abort(&mut self) {
+        *self = match *self {
+            Lifecycle::Running { onset, .. } => Lifecycle::Aborted { onset },
+            Lifecycle::Armed { .. } => Lifecycle::Idle,
+            s => s,
+        };
+    }
+
+    /// Status for the recorder.
+    pub(crate) fn status(&self) -> PerturbationStatus {
+        match *self {
+            Lifecycle::Idle => PerturbationStatus::Idle,
+            Lifecycle::Armed { .. } => PerturbationStatus::Armed,
+            Lifecycle::Running { onset, .. } => PerturbationStatus::Running { onset },
+            Lifecycle::Done { onset } => PerturbationStatus::Done { onset },
+            Lifecycle::Aborted { onset } => PerturbationStatus::Aborted { onset },
+        }
+    }
+
+    /// One active tick: fires if armed and `due(trigger)`, then, while running, returns
+    /// the ticks since onset and the direction; moves to done after `duration_ticks`.
+    pub(crate) fn advance(
+        &mut self,
+        now: Tick,
+        duration_ticks: u64,
+        due: impl FnOnce(T) -> bool,
+    ) -> Option<(u64, [f64; 2])> {
+        if let Lifecycle::Armed { dir, trigger } = *self
+            && due(trigger)
+        {
+            *self = Lifecycle::Running { dir, onset: now };
+        }
+        if let Lifecycle::Running { dir, onset } = *self {
+            let k = now.0.saturating_sub(onset.0);
+            if k >= duration_ticks {
+                *self = Lifecycle::Done { onset };
+                return None;
+            }
+            return Some((k, dir));
+        }
+        None
+    }
+}
+
 /// Which way a line must be crossed to fire a trigger.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Crossing {

@@ -9,7 +9,7 @@
 //! rest-to-rest minimum-snap polynomial `35τ⁴ − 84τ⁵ + 70τ⁶ − 20τ⁷`, which also has zero
 //! jerk at the start, is [`TransitionShape::MinimumSnap7`]. The way back is `1 − σ`.
 
-use super::{ArmError, PerturbationStatus};
+use super::{ArmError, Lifecycle, PerturbationStatus};
 use crate::config::{PositionPerturbationConfig, TransitionShape};
 use crate::time::{Rate, Tick};
 
@@ -52,25 +52,6 @@ pub enum PositionTrigger {
     NextZeroAcceleration,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum State {
-    Idle,
-    Armed {
-        dir: [f64; 2],
-        trigger: PositionTrigger,
-    },
-    Running {
-        dir: [f64; 2],
-        onset: Tick,
-    },
-    Done {
-        onset: Tick,
-    },
-    Aborted {
-        onset: Tick,
-    },
-}
-
 /// The position-perturbation generator.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PositionPerturbation {
@@ -79,7 +60,7 @@ pub struct PositionPerturbation {
     transition_ticks: u64,
     period_s: f64,
     shape: TransitionShape,
-    state: State,
+    state: Lifecycle<PositionTrigger>,
 }
 
 impl PositionPerturbation {
@@ -93,7 +74,7 @@ impl PositionPerturbation {
             transition_ticks: (config.transition_s * hz).round() as u64,
             period_s: rate.period_s(),
             shape: config.shape,
-            state: State::Idle,
+            state: Lifecycle::Idle,
         }
     }
 
@@ -139,83 +120,47 @@ impl PositionPerturbation {
     /// # Errors
     /// [`ArmError`] for a non-finite angle or while one is running.
     pub fn arm(&mut self, angle_rad: f64, trigger: PositionTrigger) -> Result<(), ArmError> {
-        if !angle_rad.is_finite() {
-            return Err(ArmError::NonFiniteAngle);
-        }
-        if matches!(self.state, State::Running { .. }) {
-            return Err(ArmError::AlreadyRunning);
-        }
-        let (s, c) = angle_rad.sin_cos();
-        self.state = State::Armed {
-            dir: [c, s],
-            trigger,
-        };
-        Ok(())
+        self.state.arm(angle_rad, trigger)
     }
 
     /// The armed trigger, if armed.
     #[must_use]
     pub fn armed_trigger(&self) -> Option<PositionTrigger> {
-        match self.state {
-            State::Armed { trigger, .. } => Some(trigger),
-            _ => None,
-        }
+        self.state.trigger()
     }
 
     /// Replace the armed trigger (the controller resolves a zero-acceleration trigger to
     /// its tick).
     pub(crate) fn retarget(&mut self, new: PositionTrigger) {
-        if let State::Armed { trigger, .. } = &mut self.state {
+        if let Some(trigger) = self.state.trigger_mut() {
             *trigger = new;
         }
     }
 
     /// Disarm or cut short.
     pub fn abort(&mut self) {
-        self.state = match self.state {
-            State::Running { onset, .. } => State::Aborted { onset },
-            State::Armed { .. } => State::Idle,
-            s => s,
-        };
+        self.state.abort();
     }
 
     /// Status for the recorder.
     #[must_use]
     pub fn status(&self) -> PerturbationStatus {
-        match self.state {
-            State::Idle => PerturbationStatus::Idle,
-            State::Armed { .. } => PerturbationStatus::Armed,
-            State::Running { onset, .. } => PerturbationStatus::Running { onset },
-            State::Done { onset } => PerturbationStatus::Done { onset },
-            State::Aborted { onset } => PerturbationStatus::Aborted { onset },
-        }
+        self.state.status()
     }
 
     /// One active tick: fire an `AtTick` trigger if due and return this tick's offset
     /// (position, velocity, acceleration per axis).
     pub fn update(&mut self, now: Tick) -> [Profile; 2] {
-        if let State::Armed {
-            dir,
-            trigger: PositionTrigger::AtTick(t),
-        } = self.state
-            && now >= t
-        {
-            self.state = State::Running { dir, onset: now };
-        }
-        if let State::Running { dir, onset } = self.state {
-            let k = now.0.saturating_sub(onset.0);
-            if k >= self.duration_ticks {
-                self.state = State::Done { onset };
-                return [Profile::default(); 2];
-            }
-            let p = self.profile(k);
-            let along = |d: f64| Profile {
-                position_m: p.position_m * d,
-                velocity_m_per_s: p.velocity_m_per_s * d,
-                acceleration_m_per_s2: p.acceleration_m_per_s2 * d,
-            };
-            return [along(dir[0]), along(dir[1])];
-        }
-        [Profile::default(); 2]
+        let due = |trigger| matches!(trigger, PositionTrigger::AtTick(t) if now >= t);
+        let Some((k, dir)) = self.state.advance(now, self.duration_ticks, due) else {
+            return [Profile::default(); 2];
+        };
+        let p = self.profile(k);
+        let along = |d: f64| Profile {
+            position_m: p.position_m * d,
+            velocity_m_per_s: p.velocity_m_per_s * d,
+            acceleration_m_per_s2: p.acceleration_m_per_s2 * d,
+        };
+        [along(dir[0]), along(dir[1])]
     }
 }
