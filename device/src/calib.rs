@@ -66,7 +66,7 @@ impl ForceCalibration {
         // away from zero (a rotation has det 1).
         if finite && det.abs() < 1e-6 {
             c.fail(
-                &format!("{key}.matrix"),
+                format!("{key}.matrix"),
                 format!("must be non-singular, got determinant {det}"),
             );
         }

@@ -44,21 +44,36 @@ impl ConfigError {
     }
 }
 
-/// Collects invalid keys while a config is checked.
+/// Collects invalid keys while a config is checked, so one run names every bad key.
+/// The runtime's protocol checks use it too, so every config error reads alike.
 #[derive(Debug, Default)]
-pub(crate) struct Checker {
+pub struct Checker {
     errors: Vec<InvalidKey>,
 }
 
 impl Checker {
-    pub(crate) fn fail(&mut self, key: &str, problem: String) {
+    /// Records `key` as invalid with `problem`.
+    pub fn fail(&mut self, key: impl Into<String>, problem: impl Into<String>) {
         self.errors.push(InvalidKey {
-            key: key.to_owned(),
-            problem,
+            key: key.into(),
+            problem: problem.into(),
         });
     }
 
-    pub(crate) fn finite(&mut self, key: &str, v: f64) -> bool {
+    /// The invalid keys so far.
+    #[must_use]
+    pub fn errors(&self) -> &[InvalidKey] {
+        &self.errors
+    }
+
+    /// The invalid keys, in the order they were found.
+    #[must_use]
+    pub fn into_errors(self) -> Vec<InvalidKey> {
+        self.errors
+    }
+
+    /// `v` must be finite; true if it is.
+    pub fn finite(&mut self, key: &str, v: f64) -> bool {
         if v.is_finite() {
             true
         } else {
@@ -67,32 +82,36 @@ impl Checker {
         }
     }
 
-    pub(crate) fn positive(&mut self, key: &str, v: f64) {
+    /// `v` must be finite and > 0.
+    pub fn positive(&mut self, key: &str, v: f64) {
         if self.finite(key, v) && v <= 0.0 {
             self.fail(key, format!("must be > 0, got {v}"));
         }
     }
 
-    pub(crate) fn non_negative(&mut self, key: &str, v: f64) {
+    /// `v` must be finite and ≥ 0.
+    pub fn non_negative(&mut self, key: &str, v: f64) {
         if self.finite(key, v) && v < 0.0 {
             self.fail(key, format!("must be >= 0, got {v}"));
         }
     }
 
-    pub(crate) fn positive2(&mut self, key: &str, v: [f64; 2]) {
+    /// Both components must be finite and > 0 (keys `key[0]`, `key[1]`).
+    pub fn positive2(&mut self, key: &str, v: [f64; 2]) {
         for (i, x) in v.iter().enumerate() {
             self.positive(&format!("{key}[{i}]"), *x);
         }
     }
 
-    pub(crate) fn non_negative2(&mut self, key: &str, v: [f64; 2]) {
+    /// Both components must be finite and ≥ 0.
+    pub fn non_negative2(&mut self, key: &str, v: [f64; 2]) {
         for (i, x) in v.iter().enumerate() {
             self.non_negative(&format!("{key}[{i}]"), *x);
         }
     }
 
     /// `v` seconds must be a whole number of ticks at `rate` (durations are whole ticks).
-    pub(crate) fn whole_ticks(&mut self, key: &str, v: f64, rate: Option<Rate>) {
+    pub fn whole_ticks(&mut self, key: &str, v: f64, rate: Option<Rate>) {
         let Some(rate) = rate else { return };
         if !v.is_finite() {
             return;
@@ -109,7 +128,21 @@ impl Checker {
         }
     }
 
-    pub(crate) fn finish(self) -> Result<(), ConfigError> {
+    /// `v` must lie strictly inside walls at `±half_width_m`, m.
+    pub fn inside(&mut self, key: &str, v: f64, half_width_m: f64) {
+        if self.finite(key, v) && v.abs() >= half_width_m {
+            self.fail(
+                key,
+                format!("must lie inside the walls at ±{half_width_m} m, got {v}"),
+            );
+        }
+    }
+
+    /// `Ok` when no key was invalid, else every invalid key.
+    ///
+    /// # Errors
+    /// [`ConfigError`] listing the invalid keys.
+    pub fn finish(self) -> Result<(), ConfigError> {
         if self.errors.is_empty() {
             Ok(())
         } else {

@@ -2,15 +2,9 @@
 
 use std::path::PathBuf;
 
-/// One invalid key of a protocol and what is wrong with it.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{key} {problem}")]
-pub struct InvalidKey {
-    /// Dotted path of the key in the protocol file, e.g. `schedule.trials`.
-    pub key: String,
-    /// What is wrong, e.g. `must be > 0, got 0`.
-    pub problem: String,
-}
+/// One invalid key of a protocol and what is wrong with it (the device's own type, so
+/// controller and protocol errors read alike).
+pub use rigtwin_device::config::InvalidKey;
 
 /// Why a protocol could not be used.
 #[derive(Debug, thiserror::Error)]
@@ -60,64 +54,6 @@ impl ProtocolError {
             ProtocolError::Invalid { errors, .. } => errors.iter().any(|e| e.key == key),
             ProtocolError::Parse { message, .. } => message.contains(key),
             ProtocolError::Read { .. } => false,
-        }
-    }
-}
-
-/// Collects invalid keys while a protocol is checked.
-#[derive(Debug, Default)]
-pub(crate) struct Checker {
-    pub(crate) errors: Vec<InvalidKey>,
-}
-
-impl Checker {
-    pub(crate) fn fail(&mut self, key: impl Into<String>, problem: impl Into<String>) {
-        self.errors.push(InvalidKey {
-            key: key.into(),
-            problem: problem.into(),
-        });
-    }
-
-    pub(crate) fn finite(&mut self, key: &str, v: f64) -> bool {
-        if v.is_finite() {
-            true
-        } else {
-            self.fail(key, format!("must be finite, got {v}"));
-            false
-        }
-    }
-
-    pub(crate) fn positive(&mut self, key: &str, v: f64) {
-        if self.finite(key, v) && v <= 0.0 {
-            self.fail(key, format!("must be > 0, got {v}"));
-        }
-    }
-
-    pub(crate) fn non_negative(&mut self, key: &str, v: f64) {
-        if self.finite(key, v) && v < 0.0 {
-            self.fail(key, format!("must be >= 0, got {v}"));
-        }
-    }
-
-    /// `v` seconds must be a whole number of 4 kHz ticks.
-    pub(crate) fn whole_ticks(&mut self, key: &str, v: f64) {
-        if v.is_finite() {
-            let ticks = v * crate::rehearse::TICK_HZ as f64;
-            if (ticks - ticks.round()).abs() > 1e-6 {
-                self.fail(
-                    key,
-                    format!("must be a whole number of 4 kHz ticks (0.25 ms), got {v} s"),
-                );
-            }
-        }
-    }
-
-    pub(crate) fn inside(&mut self, key: &str, v: f64, half_width_m: f64) {
-        if self.finite(key, v) && v.abs() >= half_width_m {
-            self.fail(
-                key,
-                format!("must lie inside the walls at ±{half_width_m} m, got {v}"),
-            );
         }
     }
 }

@@ -24,7 +24,10 @@ use rigtwin_device::config::LawKind;
 use rigtwin_world::{PlantEffects, RigConfig, SolverConfig};
 use serde::{Deserialize, Serialize};
 
-pub(crate) use error::Checker;
+pub(crate) use rigtwin_device::config::Checker;
+
+/// The 4 kHz control clock whose ticks every protocol duration must be made of.
+const CONTROL_RATE: Option<rigtwin_device::time::Rate> = rigtwin_device::time::Rate::new(4000);
 pub use error::{InvalidKey, ProtocolError};
 pub use subjects::{SubjectSpread, SubjectsConfig, VirtualSubject};
 
@@ -577,10 +580,10 @@ impl Protocol {
         if e.high_pass_hz > 0.0 && e.high_pass_order == 0 {
             c.fail("estimate.high_pass_order", "must be > 0");
         }
-        if c.errors.is_empty() {
+        if c.errors().is_empty() {
             Ok(())
         } else {
-            Err(c.errors)
+            Err(c.into_errors())
         }
     }
 
@@ -595,10 +598,10 @@ impl Protocol {
             ("reach.still_after_s", r.still_after_s),
         ] {
             c.non_negative(key, v);
-            c.whole_ticks(key, v);
+            c.whole_ticks(key, v, CONTROL_RATE);
         }
         c.positive("reach.movement_s", r.movement_s);
-        c.whole_ticks("reach.movement_s", r.movement_s);
+        c.whole_ticks("reach.movement_s", r.movement_s, CONTROL_RATE);
         if r.trials == 0 {
             c.fail("reach.trials", "must be > 0, got 0");
         }
@@ -643,7 +646,7 @@ impl Protocol {
         }
         c.non_negative("hold.force_n", h.force_n);
         c.non_negative("hold.after_s", h.after_s);
-        c.whole_ticks("hold.after_s", h.after_s);
+        c.whole_ticks("hold.after_s", h.after_s, CONTROL_RATE);
         if self.kind == ProtocolKind::HoldSinusoid && h.conditions.is_empty() {
             c.fail("hold.conditions", "must list at least one condition");
         }
