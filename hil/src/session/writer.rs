@@ -273,13 +273,13 @@ impl SessionWriter {
         )
     }
 
-    /// Starts streaming trial `meta.id` with the given optional columns.
-    ///
-    /// # Errors
-    /// [`SessionError::InvalidWrite`] if a trial is in progress, the id is taken or a
-    /// column name cannot be written; I/O errors.
-    pub fn begin_trial(&mut self, meta: TrialMeta, channels: Channels) -> Result<(), SessionError> {
-        let (rel, _, partial, sidecar) = trial_paths(&self.dir, meta.id);
+    /// The paths of trial `id` (relative file, final file, partial file, sidecar), once
+    /// it is sure that no trial is in progress and that the id and file are free.
+    fn free_trial_paths(
+        &self,
+        id: u32,
+    ) -> Result<(String, PathBuf, PathBuf, PathBuf), SessionError> {
+        let paths = trial_paths(&self.dir, id);
         if let Some(a) = &self.active {
             return Err(invalid(
                 &a.partial,
@@ -290,13 +290,23 @@ impl SessionWriter {
             .manifest
             .trials
             .iter()
-            .any(|t| t.id == meta.id || t.file == rel)
+            .any(|t| t.id == id || t.file == paths.0)
         {
             return Err(invalid(
-                &partial,
-                format!("trial id {} is already in the session", meta.id),
+                &paths.2,
+                format!("trial id {id} is already in the session"),
             ));
         }
+        Ok(paths)
+    }
+
+    /// Starts streaming trial `meta.id` with the given optional columns.
+    ///
+    /// # Errors
+    /// [`SessionError::InvalidWrite`] if a trial is in progress, the id is taken or a
+    /// column name cannot be written; I/O errors.
+    pub fn begin_trial(&mut self, meta: TrialMeta, channels: Channels) -> Result<(), SessionError> {
+        let (rel, _, partial, sidecar) = self.free_trial_paths(meta.id)?;
         let mut header: Vec<&str> = table::REQUIRED_COLUMNS.to_vec();
         let optional = table::OPTIONAL_COLUMNS;
         for (on, names) in [
@@ -491,24 +501,7 @@ impl SessionWriter {
         meta: TrialMeta,
         trial: &Trial,
     ) -> Result<&TrialEntry, SessionError> {
-        let (rel, _, partial, sidecar) = trial_paths(&self.dir, meta.id);
-        if let Some(a) = &self.active {
-            return Err(invalid(
-                &a.partial,
-                format!("trial {} is still in progress", a.meta.id),
-            ));
-        }
-        if self
-            .manifest
-            .trials
-            .iter()
-            .any(|t| t.id == meta.id || t.file == rel)
-        {
-            return Err(invalid(
-                &partial,
-                format!("trial id {} is already in the session", meta.id),
-            ));
-        }
+        let (rel, _, partial, sidecar) = self.free_trial_paths(meta.id)?;
         trial.check_writable(&partial)?;
         let mut side = String::new();
         manifest::write_trial_entry(&mut side, &entry(&meta, rel.clone(), None));
