@@ -1,3 +1,32 @@
 //! End-to-end tests of rigtwin live in `tests/tests/`; shared helpers live here.
 
 pub mod generator;
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use rigtwin::protocol::Protocol;
+use rigtwin::rehearse::{self, Options, Rehearsal, RehearseError};
+
+/// Rehearses `protocol` for one subject with `seed` into `out` on `jobs` threads,
+/// silently and without a way to cancel, as the end-to-end tests need it.
+/// `max_trials` cuts each schedule short (`None`: the whole protocol).
+///
+/// # Errors
+/// The runtime's error.
+pub fn rehearse_one(
+    protocol: &Protocol,
+    seed: u64,
+    out: &Path,
+    jobs: usize,
+    max_trials: Option<usize>,
+) -> Result<Rehearsal, RehearseError> {
+    let options = Options {
+        subjects: 1,
+        seed,
+        out_dir: out.to_path_buf(),
+        jobs,
+        max_trials,
+    };
+    rehearse::rehearse(protocol, &options, &|_| {}, &AtomicBool::new(false))
+}

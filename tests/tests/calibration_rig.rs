@@ -10,10 +10,7 @@
 //! instead of five of 25.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::sync::atomic::AtomicBool;
-
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, Options};
 use rigtwin::report;
 
 #[test]
@@ -23,14 +20,7 @@ fn calibration_rig_recovers_its_stiffness_within_one_percent() {
     p.calibration.as_mut().unwrap().repetitions = 2;
     p.validate().unwrap();
     let tmp = tempfile::tempdir().unwrap();
-    let opts = Options {
-        subjects: 1,
-        seed: p.seed,
-        out_dir: tmp.path().join("r"),
-        jobs: 2,
-        max_trials: None,
-    };
-    let r = rehearse::rehearse(&p, &opts, &|_| {}, &AtomicBool::new(false)).unwrap();
+    let r = rigtwin_tests::rehearse_one(&p, p.seed, &tmp.path().join("r"), 2, None).unwrap();
     let rep = report::build(&r);
     eprintln!("{}", report::summary_text(&rep));
     let pv = rep.piovesan.unwrap();

@@ -11,10 +11,7 @@
 //! this seed, each with its measured value and margin in a comment.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::sync::atomic::AtomicBool;
-
 use rigtwin::protocol::{EstimateMode, Protocol};
-use rigtwin::rehearse::{self, Options};
 use rigtwin::report::{self, ParamRow};
 
 fn row<'a>(rows: &'a [ParamRow], name: &str) -> &'a ParamRow {
@@ -31,14 +28,7 @@ fn borner_estimator_vs_intrinsic_arm_with_feedback_delay_beyond_t_est() {
     p.reach = Some(reach);
 
     let tmp = tempfile::tempdir().unwrap();
-    let opts = Options {
-        subjects: 1,
-        seed: p.seed,
-        out_dir: tmp.path().join("r"),
-        jobs: 4,
-        max_trials: None,
-    };
-    let mut r = rehearse::rehearse(&p, &opts, &|_| {}, &AtomicBool::new(false)).unwrap();
+    let mut r = rigtwin_tests::rehearse_one(&p, p.seed, &tmp.path().join("r"), 4, None).unwrap();
 
     let mut reports = Vec::new();
     for mode in [EstimateMode::Seed, EstimateMode::Consistent] {

@@ -9,23 +9,13 @@
 //! perturbations is 11.9 N (before: 37.5 N).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::sync::atomic::AtomicBool;
-
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, Options};
 
 #[test]
 fn hold_force_stays_at_the_command_through_the_ramps() {
     let p = Protocol::builtin("hold-sinusoid").unwrap();
     let tmp = tempfile::tempdir().unwrap();
-    let opts = Options {
-        subjects: 1,
-        seed: 1,
-        out_dir: tmp.path().join("run"),
-        jobs: 2,
-        max_trials: Some(4),
-    };
-    rehearse::rehearse(&p, &opts, &|_| {}, &AtomicBool::new(false)).unwrap();
+    rigtwin_tests::rehearse_one(&p, 1, &tmp.path().join("run"), 2, Some(4)).unwrap();
     let dir = tmp.path().join("run").join("S01").join("trials");
     let mut names: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()

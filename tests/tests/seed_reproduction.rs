@@ -13,24 +13,14 @@
 //!   truth: the axis best excited by the pulses, where feedback and filtering bias least.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use std::sync::atomic::AtomicBool;
-
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, Options};
 use rigtwin::report::{self, seed000};
 
 #[test]
 fn default_reach_perturb_rehearsal_reproduces_the_seed() {
     let p = Protocol::builtin("reach-perturb").unwrap();
     let tmp = tempfile::tempdir().unwrap();
-    let opts = Options {
-        subjects: 1,
-        seed: p.seed,
-        out_dir: tmp.path().join("r"),
-        jobs: 2,
-        max_trials: None,
-    };
-    let r = rehearse::rehearse(&p, &opts, &|_| {}, &AtomicBool::new(false)).unwrap();
+    let r = rigtwin_tests::rehearse_one(&p, p.seed, &tmp.path().join("r"), 2, None).unwrap();
     let rep = report::build(&r);
     eprintln!("{}", report::summary_text(&rep));
 
