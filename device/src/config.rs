@@ -22,13 +22,15 @@ pub struct InvalidKey {
 
 /// Every invalid key found by [`ControllerConfig::validate`].
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("invalid controller config: {}", join(.errors))]
+#[error("invalid controller config: {}", join_invalid_keys(.errors))]
 pub struct ConfigError {
     /// The invalid keys, in the order the config declares them (never empty).
     pub errors: Vec<InvalidKey>,
 }
 
-fn join(errors: &[InvalidKey]) -> String {
+/// The invalid keys as one line, `; `-separated.
+#[must_use]
+pub fn join_invalid_keys(errors: &[InvalidKey]) -> String {
     errors
         .iter()
         .map(ToString::to_string)

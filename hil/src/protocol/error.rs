@@ -28,21 +28,13 @@ pub enum ProtocolError {
         message: String,
     },
     /// The file parsed, but some values are out of range.
-    #[error("{path}: invalid protocol: {}", join(.errors))]
+    #[error("{path}: invalid protocol: {}", rigtwin_device::config::join_invalid_keys(.errors))]
     Invalid {
         /// The file.
         path: PathBuf,
         /// Every invalid key (never empty).
         errors: Vec<InvalidKey>,
     },
-}
-
-fn join(errors: &[InvalidKey]) -> String {
-    errors
-        .iter()
-        .map(ToString::to_string)
-        .collect::<Vec<_>>()
-        .join("; ")
 }
 
 impl ProtocolError {
