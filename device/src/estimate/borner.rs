@@ -21,8 +21,8 @@ use super::Mat2;
 use super::error::{EstimateError, check_finite, check_finite_mat2, check_positive};
 use super::lsq::{self, CovarianceKind};
 use crate::signal::{
-    EdgeMode, FilterKind, SignalError, Sos, butter, cumulative_trapezoid, savgol_coeffs,
-    savgol_filter, savgol_window_for_cutoff, sosfiltfilt,
+    EdgeMode, FilterKind, Sos, butter, cumulative_trapezoid, savgol_filter_planned,
+    savgol_window_for_cutoff, sosfiltfilt,
 };
 use realfft::RealFftPlanner;
 
@@ -200,7 +200,19 @@ impl Pipeline {
         planner: &mut RealFftPlanner<f64>,
         y: &[f64],
     ) -> Result<Vec<f64>, EstimateError> {
-        let jerk = savgol_fft(planner, y, self.window, self.polyorder, 3, self.dt_s)?;
+        check_finite("signal to differentiate", y)?;
+        let jerk = savgol_filter_planned(
+            planner,
+            y,
+            self.window,
+            self.polyorder,
+            3,
+            self.dt_s,
+            EdgeMode::Interp,
+        )
+        .map_err(EstimateError::signal(
+            "differentiating to jerk (Savitzky-Golay)",
+        ))?;
         match &self.sos {
             Some(sos) => sosfiltfilt(sos, &jerk)
                 .map_err(EstimateError::signal("high-pass filtering the jerk")),
@@ -327,87 +339,6 @@ impl Pipeline {
             du_ext_n: du_ext,
         })
     }
-}
-
-/// `savgol_filter(y, window, polyorder, deriv, dt, Interp)` with the interior
-/// computed as one FFT convolution instead of a dot product per sample: the same
-/// coefficients (`savgol_coeffs`), the same `interp` edges (the signal module fits
-/// the first and last `window` samples), 10–20x fewer operations at the seed's
-/// window of 253 samples.
-pub(crate) fn savgol_fft(
-    planner: &mut RealFftPlanner<f64>,
-    y: &[f64],
-    window: usize,
-    polyorder: usize,
-    deriv: usize,
-    dt_s: f64,
-) -> Result<Vec<f64>, EstimateError> {
-    let step = "differentiating to jerk (Savitzky-Golay)";
-    let n = y.len();
-    if n < 2 * window {
-        // Too short to gain anything (or too short at all): the direct filter
-        // reports the error if there is one.
-        return savgol_filter(y, window, polyorder, deriv, dt_s, EdgeMode::Interp)
-            .map_err(EstimateError::signal(step));
-    }
-    check_finite("signal to differentiate", y)?;
-    let coeffs =
-        savgol_coeffs(window, polyorder, deriv, dt_s).map_err(EstimateError::signal(step))?;
-    let half = window / 2;
-    let nfft = (n + window - 1).next_power_of_two();
-    // The planner caches plans by length: trials of one session share them.
-    let fwd = planner.plan_fft_forward(nfft);
-    let inv = planner.plan_fft_inverse(nfft);
-    let fft_err = |e: realfft::FftError| EstimateError::Signal {
-        step,
-        source: SignalError::Fft(e.to_string()),
-    };
-    let mut buf = fwd.make_input_vec();
-    buf[..n].copy_from_slice(y);
-    let mut spec_x = fwd.make_output_vec();
-    fwd.process(&mut buf, &mut spec_x).map_err(fft_err)?;
-    let mut buf = fwd.make_input_vec();
-    buf[..window].copy_from_slice(&coeffs);
-    let mut spec_c = fwd.make_output_vec();
-    fwd.process(&mut buf, &mut spec_c).map_err(fft_err)?;
-    let scale = 1.0 / nfft as f64;
-    for (a, b) in spec_x.iter_mut().zip(&spec_c) {
-        *a *= b * scale;
-    }
-    // A real signal's spectrum has zero imaginary DC and Nyquist parts up to
-    // rounding; realfft insists on exact zeros.
-    if let Some(first) = spec_x.first_mut() {
-        first.im = 0.0;
-    }
-    if let Some(last) = spec_x.last_mut() {
-        last.im = 0.0;
-    }
-    let mut conv = inv.make_output_vec();
-    inv.process(&mut spec_x, &mut conv).map_err(fft_err)?;
-    // Full convolution index m = i + half holds output i (coefficients reversed).
-    let mut out = vec![0.0; n];
-    out[half..n - half].copy_from_slice(&conv[2 * half..n]);
-    let head = savgol_filter(
-        &y[..window],
-        window,
-        polyorder,
-        deriv,
-        dt_s,
-        EdgeMode::Interp,
-    )
-    .map_err(EstimateError::signal(step))?;
-    let tail = savgol_filter(
-        &y[n - window..],
-        window,
-        polyorder,
-        deriv,
-        dt_s,
-        EdgeMode::Interp,
-    )
-    .map_err(EstimateError::signal(step))?;
-    out[..half].copy_from_slice(&head[..half]);
-    out[n - half..].copy_from_slice(&tail[window - half..]);
-    Ok(out)
 }
 
 fn add(a: &Mat2, b: &Mat2) -> Mat2 {
@@ -554,33 +485,4 @@ pub fn estimate_involuntary_impedance(
         residuals_n,
         variational,
     })
-}
-
-#[cfg(test)]
-mod tests {
-    #![allow(clippy::unwrap_used, clippy::expect_used)]
-    use super::*;
-
-    #[test]
-    fn fft_savgol_equals_the_direct_filter() {
-        // A smooth signal plus a deterministic rough part, 3000 samples: the FFT
-        // path must reproduce the direct filter (interior and interp edges) to
-        // 1e-9 of the output's scale (FFT rounding is ~1e-13 relative).
-        let y: Vec<f64> = (0..3000_u32)
-            .map(|i| {
-                let t = f64::from(i) / 4000.0;
-                let rough = f64::from(i * 7919 % 1000) / 1000.0 - 0.5;
-                0.3 + 0.1 * (3.0 * t).sin() + 1e-4 * rough
-            })
-            .collect();
-        for deriv in [0, 3] {
-            let direct = savgol_filter(&y, 253, 5, deriv, 1.0 / 4000.0, EdgeMode::Interp).unwrap();
-            let fft =
-                savgol_fft(&mut RealFftPlanner::new(), &y, 253, 5, deriv, 1.0 / 4000.0).unwrap();
-            let scale = direct.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-            for (a, b) in direct.iter().zip(&fft) {
-                assert!((a - b).abs() <= 1e-9 * scale, "deriv {deriv}: {a} vs {b}");
-            }
-        }
-    }
 }

@@ -38,7 +38,7 @@ pub use calculus::{cumulative_trapezoid, cumulative_trapezoid_no_initial, gradie
 pub use edge::EdgeMode;
 pub use error::SignalError;
 pub use filtfilt::{filtfilt, lfilter, lfilter_zi};
-pub use savgol::{savgol_coeffs, savgol_filter};
+pub use savgol::{savgol_coeffs, savgol_filter, savgol_filter_planned};
 pub use savgol_cutoff::{
     savgol_cutoff_for_window, savgol_measured_cutoff_hz, savgol_window_for_cutoff,
 };

@@ -168,6 +168,32 @@ pub fn savgol_filter(
     delta: f64,
     mode: EdgeMode,
 ) -> Result<Vec<f64>, SignalError> {
+    savgol_filter_planned(
+        &mut RealFftPlanner::new(),
+        x,
+        window,
+        polyorder,
+        deriv,
+        delta,
+        mode,
+    )
+}
+
+/// [`savgol_filter`] with the FFT plans of long windows taken from (and cached in)
+/// `planner`: callers that filter many signals of one length (the trials of a session)
+/// plan each FFT length once. Same output, same errors.
+///
+/// # Errors
+/// As [`savgol_filter`].
+pub fn savgol_filter_planned(
+    planner: &mut RealFftPlanner<f64>,
+    x: &[f64],
+    window: usize,
+    polyorder: usize,
+    deriv: usize,
+    delta: f64,
+    mode: EdgeMode,
+) -> Result<Vec<f64>, SignalError> {
     check_window(window, polyorder)?;
     check_rate("delta", delta)?;
     let needed = if mode == EdgeMode::Interp { window } else { 1 };
@@ -185,7 +211,7 @@ pub fn savgol_filter(
     let h = lsq.weights(deriv, delta, half as f64)?;
     let mut y = vec![0.0; n];
     if mode == EdgeMode::Interp {
-        let inner = correlate_valid(&h, x)?;
+        let inner = correlate_valid(planner, &h, x)?;
         y[half..n - half].copy_from_slice(&inner);
         // Edges: the polynomial fitted to the first / last window, evaluated at the
         // samples the centred filter cannot reach (scipy's `_fit_edges_polyfit`).
@@ -201,7 +227,7 @@ pub fn savgol_filter(
         let padded: Vec<f64> = (0..n + 2 * half)
             .map(|j| extended(x, j as isize - half as isize, mode))
             .collect();
-        y = correlate_valid(&h, &padded)?;
+        y = correlate_valid(planner, &h, &padded)?;
     }
     Ok(y)
 }
@@ -210,7 +236,11 @@ pub fn savgol_filter(
 /// (`s.len() − h.len() + 1` outputs). Long windows on long signals go through a
 /// real FFT (O(n log n) instead of O(n·window): the seed's 253-tap filter on a
 /// 14 000-sample trial); short ones are direct dot products.
-fn correlate_valid(h: &[f64], s: &[f64]) -> Result<Vec<f64>, SignalError> {
+fn correlate_valid(
+    planner: &mut RealFftPlanner<f64>,
+    h: &[f64],
+    s: &[f64],
+) -> Result<Vec<f64>, SignalError> {
     let w = h.len();
     let m = s.len();
     let n_out = m + 1 - w;
@@ -218,7 +248,6 @@ fn correlate_valid(h: &[f64], s: &[f64]) -> Result<Vec<f64>, SignalError> {
         return Ok((0..n_out).map(|j| dot(h, &s[j..j + w])).collect());
     }
     let l = (m + w - 1).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
     let forward = planner.plan_fft_forward(l);
     let inverse = planner.plan_fft_inverse(l);
     let fft_err = |e: realfft::FftError| SignalError::Fft(e.to_string());
