@@ -161,6 +161,16 @@ impl SubjectsConfig {
             factor(s.segment_length),
             factor(s.feedback_gain),
         ];
+        self.with_factors(index, f)
+    }
+
+    /// Subject `index` (1-based) made from the nominal arm with the given factors
+    /// (stiffness, co-contraction, upper arm length, forearm length, feedback gain), as
+    /// [`SubjectsConfig::draw`] applies its drawn ones; `compare`'s subject fit uses it to
+    /// build the subject it fits. A length factor that gives a bad segment keeps the
+    /// nominal segment.
+    #[must_use]
+    pub fn with_factors(&self, index: u32, f: [f64; 5]) -> VirtualSubject {
         let mut arm = self.arm.clone();
         for k in &mut arm.muscles.stiffness_passive_n_per_m {
             *k *= f[0];
@@ -183,7 +193,7 @@ impl SubjectsConfig {
         arm.feedback.velocity_gain_n_s_per_m *= f[4];
         VirtualSubject {
             index,
-            id,
+            id: format!("S{index:02}"),
             arm,
             shoulder_m: self.shoulder_m,
             co_contraction_level: self.co_contraction_level,
