@@ -66,7 +66,8 @@ const TIMING_TOL_S: f64 = 0.5e-3;
 pub struct FitOptions {
     /// Trials replayed per evaluation (see [`fit_trials`]).
     pub max_trials: usize,
-    /// Nelder–Mead evaluations at most.
+    /// Nelder–Mead evaluations at most (checked before each simplex step, which makes up
+    /// to 5 more).
     pub max_evaluations: usize,
 }
 
@@ -127,7 +128,7 @@ pub struct SubjectFit {
     pub discrepancy_fitted: f64,
     /// Per channel and phase, before and after.
     pub residuals: Vec<FitResidual>,
-    /// Factors that ended on a search bound (not identified within `[1/4, 4]`).
+    /// Factors that ended within 1 % of a search bound (not identified within `[1/4, 4]`).
     pub at_bound: Vec<String>,
 }
 
@@ -504,7 +505,7 @@ pub fn fit_subject(
     let at_bound = names
         .iter()
         .zip(best)
-        .filter(|(_, v)| v.abs() >= LOG_BOUND - 1e-9)
+        .filter(|(_, v)| v.abs() >= LOG_BOUND - 0.01)
         .map(|(n, _)| (*n).to_owned())
         .collect();
     Ok(SubjectFit {
@@ -545,7 +546,8 @@ mod tests {
             0.3,
             200,
         );
-        assert!(n <= 200);
+        // The budget is checked before each step; a step makes at most 5 evaluations.
+        assert!(n <= 204, "{n}");
         assert!(
             (x[0] - 0.5).abs() < 0.02 && (x[1] + 0.3).abs() < 0.02 && (x[2] - 0.1).abs() < 0.02,
             "{x:?}"
@@ -558,6 +560,7 @@ mod tests {
             0.3,
             200,
         );
-        assert!((x[0] - LOG_BOUND).abs() < 1e-6, "{x:?}");
+        // Within the stop rule's 1 % simplex size of the bound.
+        assert!((x[0] - LOG_BOUND).abs() < 0.01, "{x:?}");
     }
 }
