@@ -9,22 +9,7 @@ use anyhow::Context as _;
 use rigtwin::discrepancy::{CompareOptions, Comparison, ExtendedModel, compare};
 use rigtwin::session::Session;
 
-/// Replay every trial of a session in simulation with the session's own inputs (device
-/// admittance, handle mass, subject geometry, start and goal, perturbation angle) and
-/// show what the simulation gets wrong.
-///
-/// First the baseline subject is fitted to the session: muscle stiffness, co-contraction
-/// and feedback gain factors (Nelder-Mead on noise-free replays of 8 perturbed trials,
-/// minimising the RMS of the NRMSEs of x, y over the reach and x, y, fx, fy over the
-/// 150 ms response) and the reach
-/// timing (read from the measured 5 % and 95 % travel times). Then every trial is
-/// replayed with the fitted subject and the model's seeded motor and sensor noise, and
-/// the report gives, per channel: RMSE and NRMSE over the whole reach and over the
-/// 150 ms perturbation response; band RMS of measured, simulated and their difference in
-/// 0-2, 2-8 and 8-30 Hz (Welch); and the Börner estimate of D and K on the measured and
-/// on the simulated trials. With --model, the subject fitted to the baseline is kept and
-/// the model's plant and human-side effects are added, so the two runs differ by the
-/// model alone.
+/// The arguments of `rigtwin compare` (the help text is on the subcommand).
 #[derive(Debug, Clone, clap::Args)]
 #[command(after_help = "\
 Examples:
