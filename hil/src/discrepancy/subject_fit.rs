@@ -537,6 +537,38 @@ mod tests {
     use super::*;
 
     #[test]
+    fn travel_times_of_a_linear_reach() {
+        // y from -0.1 to 0.1 m linearly between rows 100 and 300 at 1 kHz: 5 % of the
+        // travel at row 110, 95 % at row 290, exactly (linear interpolation is exact).
+        let y: Vec<f64> = (0..400)
+            .map(|k| -0.1 + 0.2 * ((k as f64 - 100.0) / 200.0).clamp(0.0, 1.0))
+            .collect();
+        let t = Trial {
+            t_s: (0..400).map(|k| k as f64 / 1000.0).collect(),
+            x_m: vec![0.0; 400],
+            y_m: y,
+            fx_n: vec![0.0; 400],
+            fy_n: vec![0.0; 400],
+            pert_fx_n: vec![0.0; 400],
+            pert_fy_n: vec![0.0; 400],
+            vx_m_per_s: None,
+            vy_m_per_s: None,
+            ref_x_m: None,
+            ref_y_m: None,
+            cmd_fx_n: None,
+            cmd_fy_n: None,
+            extra: Vec::new(),
+        };
+        let tt = travel_times_s(&t, [0.0, -0.1], [0.0, 0.1], 1000.0).unwrap();
+        assert!(
+            (tt[0] - 0.110).abs() < 1e-12 && (tt[1] - 0.290).abs() < 1e-12,
+            "{tt:?}"
+        );
+        // A reach that stops at half its travel never passes 95 %.
+        assert!(travel_times_s(&t, [0.0, -0.1], [0.0, 0.3], 1000.0).is_none());
+    }
+
+    #[test]
     fn nelder_mead_finds_a_bounded_quadratic_minimum() {
         // Minimum at (0.5, -0.3, 0.1): well inside the bounds; 200 evaluations are
         // plenty for 3 dimensions, and the stop rule (1 % simplex size) bounds the error.

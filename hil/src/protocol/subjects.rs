@@ -201,3 +201,23 @@ impl SubjectsConfig {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drawn_subject_is_the_nominal_arm_with_its_factors() {
+        // `compare`'s subject fit builds subjects with `with_factors`; a drawn subject must
+        // be exactly that subject for its drawn factors, or the fit would chase another arm.
+        let c = SubjectsConfig {
+            first_is_nominal: false,
+            ..SubjectsConfig::default()
+        };
+        for index in 1..4 {
+            let d = c.draw(7, index);
+            assert_ne!(d.factors, [1.0; 5]);
+            assert_eq!(c.with_factors(index, d.factors), d);
+        }
+    }
+}
