@@ -534,6 +534,7 @@ pub fn fit_subject(
 
 #[cfg(test)]
 mod tests {
+    #![allow(clippy::unwrap_used)]
     use super::*;
 
     #[test]
