@@ -42,7 +42,25 @@ pub enum Command {
     Estimate(estimate::Args),
     /// Name the plant effect the nominal model misses in a measured session.
     Diagnose(diagnose::Args),
-    /// Replay a session in simulation: error per channel and phase.
+    /// Replay a session in simulation: the fitted subject, error per channel, phase and band,
+    /// D and K measured vs simulated.
+    ///
+    /// Replays every trial of a session in simulation with the session's own inputs (device
+    /// admittance, handle mass, subject geometry, start and goal, perturbation angle) and
+    /// shows what the simulation gets wrong.
+    ///
+    /// First the baseline subject is fitted to the session: muscle stiffness, co-contraction
+    /// and feedback gain factors (Nelder-Mead on noise-free replays of 8 perturbed trials,
+    /// minimising the RMS of the NRMSEs of x, y over the reach and x, y, fx, fy over the
+    /// 150 ms response) and the reach timing (read from the measured 5 % and 95 % travel
+    /// times). Then every trial is
+    /// replayed with the fitted subject and the model's seeded motor and sensor noise, and
+    /// the report gives, per channel: RMSE and NRMSE over the whole reach and over the
+    /// 150 ms perturbation response; band RMS of measured, simulated and their difference in
+    /// 0-2, 2-8 and 8-30 Hz (Welch); and the Börner estimate of D and K on the measured and
+    /// on the simulated trials. With --model, the subject fitted to the baseline is kept and
+    /// the model's plant and human-side effects are added, so the two runs differ by the
+    /// model alone.
     Compare(compare::Args),
     /// Show a recorded session in the rerun viewer (live, or saved to an .rrd).
     #[cfg(feature = "rerun")]

@@ -12,9 +12,12 @@
 //! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
 //! | `model.rs` | the extended model as TOML (`--write-model`) |
 //! | `plots.rs` | the PNG figures of `diagnosis.md` |
-//! | `replay.rs` | `compare`: the session replayed in simulation, error per channel and phase |
+//! | `replay.rs` | `compare`: the session replayed in simulation, error per channel and phase, D and K measured vs simulated |
+//! | `subject_fit.rs` | the baseline subject (stiffness, co-contraction, feedback gain, reach timing) fitted to a session |
+//! | `bands.rs` | frequency content of the discrepancy: Welch band powers per channel |
 //! | `report.rs` | the table a person reads and `diagnosis.md` |
 
+mod bands;
 mod candidate;
 mod crossval;
 mod delay;
@@ -30,7 +33,9 @@ mod ripple;
 mod rotation;
 mod signals;
 pub mod stats;
+mod subject_fit;
 
+pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
 pub use candidate::{Baseline, Candidate, masses, nominal_target, push_rows, residual_rows};
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
@@ -42,10 +47,16 @@ pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
 pub use gram::Gram;
 pub use model::ExtendedModel;
-pub use replay::{ChannelError, Comparison, RESPONSE_WINDOW_S, compare};
+pub use replay::{
+    CHANNELS, ChannelError, CompareOptions, Comparison, ImpedanceComparison, RESPONSE_WINDOW_S,
+    Timing, compare,
+};
 pub use report::{table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;
 pub use signals::{
     BalanceSignals, EVALUATION_RATE_HZ, SMOOTHING_ORDER, SMOOTHING_WINDOW_S, window_for_rate,
+};
+pub use subject_fit::{
+    FitOptions, FitResidual, SubjectFit, fit_subject, fit_trials, travel_times_s,
 };

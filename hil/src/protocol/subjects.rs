@@ -161,6 +161,16 @@ impl SubjectsConfig {
             factor(s.segment_length),
             factor(s.feedback_gain),
         ];
+        self.with_factors(index, f)
+    }
+
+    /// Subject `index` (1-based) made from the nominal arm with the given factors
+    /// (stiffness, co-contraction, upper arm length, forearm length, feedback gain), as
+    /// [`SubjectsConfig::draw`] applies its drawn ones; `compare`'s subject fit uses it to
+    /// build the subject it fits. A length factor that gives a bad segment keeps the
+    /// nominal segment.
+    #[must_use]
+    pub fn with_factors(&self, index: u32, f: [f64; 5]) -> VirtualSubject {
         let mut arm = self.arm.clone();
         for k in &mut arm.muscles.stiffness_passive_n_per_m {
             *k *= f[0];
@@ -183,11 +193,31 @@ impl SubjectsConfig {
         arm.feedback.velocity_gain_n_s_per_m *= f[4];
         VirtualSubject {
             index,
-            id,
+            id: format!("S{index:02}"),
             arm,
             shoulder_m: self.shoulder_m,
             co_contraction_level: self.co_contraction_level,
             factors: f,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drawn_subject_is_the_nominal_arm_with_its_factors() {
+        // `compare`'s subject fit builds subjects with `with_factors`; a drawn subject must
+        // be exactly that subject for its drawn factors, or the fit would chase another arm.
+        let c = SubjectsConfig {
+            first_is_nominal: false,
+            ..SubjectsConfig::default()
+        };
+        for index in 1..4 {
+            let d = c.draw(7, index);
+            assert_ne!(d.factors, [1.0; 5]);
+            assert_eq!(c.with_factors(index, d.factors), d);
         }
     }
 }
