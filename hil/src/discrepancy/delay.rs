@@ -14,7 +14,7 @@
 //! filter passes little above ~30 Hz, where linear interpolation at 1 kHz is exact to
 //! 0.1 %.
 
-use super::candidate::{Candidate, push_rows, residual_rows};
+use super::candidate::{Candidate, Design, Designed, design_grams};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -63,6 +63,17 @@ impl ActuationDelay {
     }
 }
 
+impl Designed for ActuationDelay {
+    fn design(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        _latency_s: f64,
+    ) -> Result<Design, DiscrepancyError> {
+        Ok(Design::balance(sig, self.lag_s(s), 0.0))
+    }
+}
+
 impl Candidate for ActuationDelay {
     fn name(&self) -> &'static str {
         "actuation-delay"
@@ -76,24 +87,8 @@ impl Candidate for ActuationDelay {
     fn columns(&self) -> usize {
         2
     }
-    fn grams(&self, sig: &BalanceSignals, _latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        let f = [sig.at_rows(&sig.f[0]), sig.at_rows(&sig.f[1])];
-        let norms = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
-        Ok((0..self.settings())
-            .map(|s| {
-                let lag = self.lag_s(s);
-                let targets = [0, 1].map(|axis| {
-                    sig.delayed_command(axis, lag)
-                        .iter()
-                        .zip(&f[axis])
-                        .map(|(u, f)| u + f)
-                        .collect::<Vec<_>>()
-                });
-                let mut g = Gram::new(2);
-                push_rows(&mut g, sig, &targets, &norms, |_, _, _| {});
-                g
-            })
-            .collect())
+    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
+        design_grams(self, self.settings(), sig, latency_s)
     }
     fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![("delay_ms".to_string(), self.lag_s(s) * 1e3)]
@@ -103,17 +98,8 @@ impl Candidate for ActuationDelay {
         sig: &BalanceSignals,
         s: usize,
         beta: &[f64],
-        _latency_s: f64,
+        latency_s: f64,
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        let lag = self.lag_s(s);
-        let t = [0, 1].map(|axis| {
-            let f = sig.at_rows(&sig.f[axis]);
-            sig.delayed_command(axis, lag)
-                .iter()
-                .zip(&f)
-                .map(|(u, f)| u + f)
-                .collect::<Vec<_>>()
-        });
-        Ok(residual_rows(sig, &t, beta, |_, _, _| {}))
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }
