@@ -93,13 +93,15 @@ pub fn residual_rows(
 }
 
 /// The nominal balance's target `u(t − latency) + F` on the evaluated rows of `axis`,
-/// and the normaliser `u` there.
+/// and the normaliser `u` there (one axis of [`Design::nominal`]).
 #[must_use]
 pub fn nominal_target(sig: &BalanceSignals, axis: usize, latency_s: f64) -> (Vec<f64>, Vec<f64>) {
-    let u = sig.delayed_command(axis, latency_s);
-    let f = sig.at_rows(&sig.f[axis]);
-    let norm = sig.at_rows(&sig.u[axis]);
-    (u.iter().zip(&f).map(|(u, f)| u + f).collect(), norm)
+    let Design {
+        target: [tx, ty],
+        norm: [nx, ny],
+        ..
+    } = Design::nominal(sig, latency_s);
+    if axis == 0 { (tx, nx) } else { (ty, ny) }
 }
 
 /// Adds the rows of both axes to `g`: regressors `[a·[axis = x], a·[axis = y], extra…]`
