@@ -1,24 +1,29 @@
 //! Candidate `actuation-delay`: the motor force lags its command, `u(t − τ)`.
 //!
-//! Every rig has some latency between the logged command and the force (compute tick,
-//! zero-order hold of the 2 kHz motor update, the logging convention). The baseline
-//! therefore fits its own latency within [`NOMINAL_LATENCY_MAX_S`] (two control ticks),
-//! and this candidate reports the delay **beyond** the baseline's. When a hidden delay
-//! is present the baseline's latency sits at that bound, so the report is the lag in
-//! excess of a two-tick nominal rig; a rig whose own latency is shorter (the shared
-//! emulated rig: 0.33 ms) gets its delay underestimated by the difference (≤ 0.5 ms).
-//! The search is over a grid of lags at a tenth of a 4 kHz tick; between samples the
-//! command is interpolated linearly.
+//! With the balance filter of `signals.rs` the nominal balance is exact in time: the
+//! logged command is the command as the motor holds it, tick by tick, so a rig that
+//! applies the command in the tick it is computed shows no lag at all (the project's
+//! plant and the shared rig both fit 0–0.05 ms). The baseline still fits a latency
+//! within [`NOMINAL_LATENCY_MAX_S`] — one 4 kHz tick, for a rig that applies the
+//! command of tick k from tick k + 1 — and this candidate searches the whole lag. Its
+//! `delay_ms` is that whole lag from the logged command to the force, which is what
+//! the simulator's delay line adds to a plant without latency (`--write-model`); the
+//! baseline's latency is reported beside it, not subtracted (on a delayed rig the
+//! baseline's latency sits at its bound, so subtracting it would bias the delay low by
+//! a tick). Between samples the filtered command is interpolated linearly: the balance
+//! filter passes little above ~30 Hz, where linear interpolation at 1 kHz is exact to
+//! 0.1 %.
 
-use super::candidate::{Candidate, push_rows, residual_rows};
+use super::candidate::{Candidate, Design, Designed, design_grams};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
 
-/// Largest latency a nominal rig may have, s: two 4 kHz ticks — the command computed at
-/// tick k acts from tick k + 1, and the 2 kHz zero-order hold adds half a motor period
-/// (one tick) on average.
-pub const NOMINAL_LATENCY_MAX_S: f64 = 0.5e-3;
+/// Largest latency a nominal rig may have, s: one 4 kHz tick — the command computed at
+/// tick k acts from tick k + 1 at the latest. The 2 kHz zero-order hold adds nothing:
+/// the logged command is already the held one. (Two ticks, as before the balance
+/// filter, let the baseline absorb half of a 1 ms delay and cut its gain to ~35 %.)
+pub const NOMINAL_LATENCY_MAX_S: f64 = 0.25e-3;
 /// Largest actuation delay searched, s. Far beyond it the stiff position loop of an
 /// admittance rig could not stay stable.
 pub const MAX_DELAY_S: f64 = 25e-3;
@@ -42,7 +47,7 @@ impl ActuationDelay {
         }
     }
 
-    /// The nominal latency search of the baseline: 0–0.5 ms in 25 µs steps.
+    /// The nominal latency search of the baseline: 0–0.25 ms in 25 µs steps.
     #[must_use]
     pub fn nominal() -> Self {
         ActuationDelay {
@@ -55,6 +60,17 @@ impl ActuationDelay {
     #[must_use]
     pub fn lag_s(&self, s: usize) -> f64 {
         s as f64 * self.step_s
+    }
+}
+
+impl Designed for ActuationDelay {
+    fn design(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        _latency_s: f64,
+    ) -> Result<Design, DiscrepancyError> {
+        Ok(Design::balance(sig, self.lag_s(s), 0.0))
     }
 }
 
@@ -71,44 +87,19 @@ impl Candidate for ActuationDelay {
     fn columns(&self) -> usize {
         2
     }
-    fn grams(&self, sig: &BalanceSignals, _latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        let f = [sig.at_rows(&sig.f[0]), sig.at_rows(&sig.f[1])];
-        let norms = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
-        Ok((0..self.settings())
-            .map(|s| {
-                let lag = self.lag_s(s);
-                let targets = [0, 1].map(|axis| {
-                    sig.delayed_command(axis, lag)
-                        .iter()
-                        .zip(&f[axis])
-                        .map(|(u, f)| u + f)
-                        .collect::<Vec<_>>()
-                });
-                let mut g = Gram::new(2);
-                push_rows(&mut g, sig, &targets, &norms, |_, _, _| {});
-                g
-            })
-            .collect())
+    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
+        design_grams(self, self.settings(), sig, latency_s)
     }
-    fn parameters(&self, s: usize, _beta: &[f64], latency_s: f64) -> Vec<(String, f64)> {
-        vec![("delay_ms".to_string(), (self.lag_s(s) - latency_s) * 1e3)]
+    fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
+        vec![("delay_ms".to_string(), self.lag_s(s) * 1e3)]
     }
     fn residual(
         &self,
         sig: &BalanceSignals,
         s: usize,
         beta: &[f64],
-        _latency_s: f64,
+        latency_s: f64,
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        let lag = self.lag_s(s);
-        let t = [0, 1].map(|axis| {
-            let f = sig.at_rows(&sig.f[axis]);
-            sig.delayed_command(axis, lag)
-                .iter()
-                .zip(&f)
-                .map(|(u, f)| u + f)
-                .collect::<Vec<_>>()
-        });
-        Ok(residual_rows(sig, &t, beta, |_, _, _| {}))
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

@@ -3,7 +3,7 @@
 //! `viscous_n_s_per_m`, `smooth_velocity_m_per_s`). `Fc` and `b` enter linearly; the
 //! smoothing velocity `v_s` is searched over a grid.
 
-use super::candidate::{Candidate, nominal_target, push_rows, residual_rows};
+use super::candidate::{Candidate, Design, Designed, design_grams};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -15,6 +15,28 @@ pub const SMOOTH_VELOCITIES_M_PER_S: [f64; 7] = [2e-4, 5e-4, 1e-3, 2e-3, 4e-3, 7
 /// The rail-friction candidate.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct RailFriction;
+
+impl Designed for RailFriction {
+    /// The nominal balance plus, per axis, the filtered `tanh(v / v_s)` and the
+    /// velocity (coefficients `Fc`, `b`: the friction force is `−(Fc tanh + b v)`, so
+    /// on the target side of `u + F = m a + Fc tanh + b v` both enter with `+`).
+    fn design(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        latency_s: f64,
+    ) -> Result<Design, DiscrepancyError> {
+        let vs = SMOOTH_VELOCITIES_M_PER_S.get(s).copied().unwrap_or(1e-3);
+        let own = |axis: usize| -> Result<Vec<Vec<f64>>, DiscrepancyError> {
+            let raw: Vec<f64> = sig.v[axis].iter().map(|v| (v / vs).tanh()).collect();
+            Ok(vec![
+                sig.at_rows(&sig.smooth(&raw)?),
+                sig.at_rows(&sig.v[axis]),
+            ])
+        };
+        Ok(Design::nominal(sig, latency_s).with_own([own(0)?, own(1)?]))
+    }
+}
 
 impl Candidate for RailFriction {
     fn name(&self) -> &'static str {
@@ -36,27 +58,7 @@ impl Candidate for RailFriction {
         4
     }
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        let (tx, nx) = nominal_target(sig, 0, latency_s);
-        let (ty, ny) = nominal_target(sig, 1, latency_s);
-        let targets = [tx, ty];
-        let norms = [nx, ny];
-        let v = [sig.at_rows(&sig.v[0]), sig.at_rows(&sig.v[1])];
-        SMOOTH_VELOCITIES_M_PER_S
-            .iter()
-            .map(|vs| {
-                let tanh = |axis: usize| -> Result<Vec<f64>, DiscrepancyError> {
-                    let raw: Vec<f64> = sig.v[axis].iter().map(|v| (v / vs).tanh()).collect();
-                    Ok(sig.at_rows(&sig.smooth(&raw)?))
-                };
-                let th = [tanh(0)?, tanh(1)?];
-                let mut g = Gram::new(4);
-                push_rows(&mut g, sig, &targets, &norms, |axis, r, x| {
-                    x[0] = th[axis][r];
-                    x[1] = v[axis][r];
-                });
-                Ok(g)
-            })
-            .collect()
+        design_grams(self, self.settings(), sig, latency_s)
     }
     fn parameters(&self, s: usize, beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![
@@ -82,20 +84,6 @@ impl Candidate for RailFriction {
         beta: &[f64],
         latency_s: f64,
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        let vs = SMOOTH_VELOCITIES_M_PER_S.get(s).copied().unwrap_or(1e-3);
-        let t = [
-            nominal_target(sig, 0, latency_s).0,
-            nominal_target(sig, 1, latency_s).0,
-        ];
-        let v = [sig.at_rows(&sig.v[0]), sig.at_rows(&sig.v[1])];
-        let tanh = |axis: usize| -> Result<Vec<f64>, DiscrepancyError> {
-            let raw: Vec<f64> = sig.v[axis].iter().map(|v| (v / vs).tanh()).collect();
-            Ok(sig.at_rows(&sig.smooth(&raw)?))
-        };
-        let th = [tanh(0)?, tanh(1)?];
-        Ok(residual_rows(sig, &t, beta, |axis, r, x| {
-            x[0] = th[axis][r];
-            x[1] = v[axis][r];
-        }))
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

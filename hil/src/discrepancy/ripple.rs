@@ -13,7 +13,7 @@
 
 use std::f64::consts::TAU;
 
-use super::candidate::{Candidate, nominal_target, residual_rows};
+use super::candidate::{Candidate, Design, Designed};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -58,6 +58,27 @@ impl ForceRipple {
     }
 }
 
+impl Designed for ForceRipple {
+    /// The nominal balance plus `sin`, `cos` of `2π q / p` per axis.
+    fn design(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        latency_s: f64,
+    ) -> Result<Design, DiscrepancyError> {
+        let k = 1.0 / self.pitch_m(s);
+        let own = |axis: usize| {
+            let (sn, cs): (Vec<f64>, Vec<f64>) = sig
+                .at_rows(&sig.q[axis])
+                .iter()
+                .map(|q| (TAU * k * q).sin_cos())
+                .unzip();
+            vec![sn, cs]
+        };
+        Ok(Design::nominal(sig, latency_s).with_own([own(0), own(1)]))
+    }
+}
+
 impl Candidate for ForceRipple {
     fn name(&self) -> &'static str {
         "force-ripple"
@@ -71,15 +92,17 @@ impl Candidate for ForceRipple {
     fn columns(&self) -> usize {
         4
     }
+    /// All pitches in one pass over the rows: `e^{i 2π k q}` for `k = k0 + j dk` by a
+    /// rotation recurrence over `j` (one `sin_cos` per row instead of one per pitch).
+    /// Equal to [`Designed::design`]'s Gram at every setting (a unit test checks it).
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
+        let nominal = Design::nominal(sig, latency_s);
         let mut grams = vec![Gram::new(4); self.n];
         let mut x = [0.0; 4];
         for axis in 0..2 {
-            let (target, norm) = nominal_target(sig, axis, latency_s);
             let a = sig.at_rows(&sig.a[axis]);
             let q = sig.at_rows(&sig.q[axis]);
             for r in 0..q.len() {
-                // e^{i 2π k q} for k = k0 + j dk by a rotation recurrence over j.
                 let (s0, c0) = (TAU * self.k0_per_m * q[r]).sin_cos();
                 let (sd, cd) = (TAU * self.dk_per_m * q[r]).sin_cos();
                 let (mut s, mut c) = (s0, c0);
@@ -88,7 +111,7 @@ impl Candidate for ForceRipple {
                 for g in &mut grams {
                     x[2] = s;
                     x[3] = c;
-                    g.push(&x, target[r], norm[r]);
+                    g.push(&x, nominal.target[axis][r], nominal.norm[axis][r]);
                     (s, c) = (s * cd + c * sd, c * cd - s * sd);
                 }
             }
@@ -118,16 +141,6 @@ impl Candidate for ForceRipple {
         beta: &[f64],
         latency_s: f64,
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        let t = [
-            nominal_target(sig, 0, latency_s).0,
-            nominal_target(sig, 1, latency_s).0,
-        ];
-        let q = [sig.at_rows(&sig.q[0]), sig.at_rows(&sig.q[1])];
-        let k = 1.0 / self.pitch_m(s);
-        Ok(residual_rows(sig, &t, beta, |axis, r, x| {
-            let (sn, cs) = (TAU * k * q[axis][r]).sin_cos();
-            x[0] = sn;
-            x[1] = cs;
-        }))
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

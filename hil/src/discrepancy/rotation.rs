@@ -12,7 +12,7 @@
 //! sensor, an effect outside the catalog). Each angle's Gram is a quadratic form of one
 //! 5 × 5 Gram of `[a_x, a_y, u, F_own, F_other]` per trial.
 
-use super::candidate::{Candidate, push_rows, residual_rows};
+use super::candidate::{Candidate, Design, Designed, push_rows};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -42,6 +42,22 @@ impl SensorRotation {
     #[must_use]
     pub fn angle_deg(&self, s: usize) -> f64 {
         -self.max_deg + s as f64 * self.step_deg
+    }
+}
+
+impl Designed for SensorRotation {
+    /// The balance with the sensor force turned back by θ into the rig frame.
+    fn design(
+        &self,
+        sig: &BalanceSignals,
+        s: usize,
+        latency_s: f64,
+    ) -> Result<Design, DiscrepancyError> {
+        Ok(Design::balance(
+            sig,
+            latency_s,
+            self.angle_deg(s).to_radians(),
+        ))
     }
 }
 
@@ -106,24 +122,6 @@ impl Candidate for SensorRotation {
         beta: &[f64],
         latency_s: f64,
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        let (sn, cs) = self.angle_deg(s).to_radians().sin_cos();
-        let u = [
-            sig.delayed_command(0, latency_s),
-            sig.delayed_command(1, latency_s),
-        ];
-        let f = [sig.at_rows(&sig.f[0]), sig.at_rows(&sig.f[1])];
-        let t = [
-            u[0].iter()
-                .zip(&f[0])
-                .zip(&f[1])
-                .map(|((u, fx), fy)| u + cs * fx + sn * fy)
-                .collect(),
-            u[1].iter()
-                .zip(&f[0])
-                .zip(&f[1])
-                .map(|((u, fx), fy)| u - sn * fx + cs * fy)
-                .collect(),
-        ];
-        Ok(residual_rows(sig, &t, beta, |_, _, _| {}))
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

@@ -1,27 +1,41 @@
-//! The channels of one trial that the cart force balance needs, smoothed alike.
+//! The channels of one trial that the cart force balance needs, filtered so that the
+//! balance holds term by term.
 //!
 //! Position, velocity and acceleration come from one Savitzky–Golay fit of the
-//! encoder position (cubic, about 41 ms long); the motor command and the sensor force
-//! go through the same smoothing (derivative 0), so that every term of the balance
-//! `m·a = u + F + effects` has passed the same filter and the filter's own lag and
-//! roll-off cancel out of the comparison. Regressors that are nonlinear in the state
-//! (friction, ripple) are evaluated sample by sample and smoothed by the same filter
-//! before use ([`BalanceSignals::smooth`]).
+//! encoder position (cubic, about 41 ms long). The forces (motor command, sensor force,
+//! and the nonlinear regressors of friction) go through the **balance filter**: the
+//! Savitzky–Golay second-derivative filter divided by the second difference
+//! `x[k+1] − 2x[k] + x[k−1]`, an exact polynomial division that leaves a symmetric FIR
+//! of `window − 2` taps summing to one ([`balance_filter`]). The carts integrate their
+//! forces twice, so the second difference of the positions is (up to the 4 kHz ticks
+//! inside a block, below 1 % at 200 Hz) the force over the mass; the acceleration
+//! filter applied to the positions is then *exactly* the balance filter applied to the
+//! forces, at every frequency, not only in the pass band.
+//!
+//! Why not the derivative-0 Savitzky–Golay filter for the forces, which agrees with
+//! the acceleration filter in the pass band: above it the two leak differently. A rig
+//! whose stiff position loop oscillates (an actuation delay of 1–1.5 ms drives a
+//! 170–225 Hz limit cycle of tens of newtons in the command) leaked ~2 N of that
+//! oscillation into the smoothed command and far less into the smoothed acceleration,
+//! so no delay could balance it: 60 % of the residual remained with the delay fitted,
+//! and the fitted masses were 3 % high even on a plant without effects. With the
+//! balance filter the masses come out within 0.1 % of the plant's and the residual
+//! with the right delay falls to the noise floor of an effect-free session.
 //!
 //! The balance is evaluated on every `decim`-th sample, away from the ends by half a
-//! window: the smoothed signals hold little above ~30 Hz, so samples closer than
+//! window: the filtered signals hold little above ~30 Hz, so samples closer than
 //! ~2 ms carry almost no new information and only cost time.
 
-use rigtwin_device::signal::{EdgeMode, savgol_filter};
+use rigtwin_device::signal::{EdgeMode, SignalError, savgol_coeffs, savgol_filter};
 
 use super::error::DiscrepancyError;
 use crate::session::{Trial, TrialEntry};
 
 /// Length of the smoothing window, s. 41 ms with a cubic passes ~30 Hz: enough for the
-/// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz. A
-/// 21 ms window doubled the nominal balance's residual on the project's plant (the
-/// position loop's jitter and the encoder quantum pass into the acceleration), an 81 ms
-/// one starts to bias the fitted masses (12.9 instead of 12.3 kg).
+/// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz,
+/// while the acceleration taken from a 1 µm encoder stays quiet enough not to bias
+/// the fitted masses (errors in a regressor pull its coefficient towards zero; a
+/// window of half the length has ~6 times the acceleration noise).
 pub const SMOOTHING_WINDOW_S: f64 = 0.041;
 /// Polynomial order of the Savitzky–Golay fit.
 pub const SMOOTHING_ORDER: usize = 3;
@@ -47,10 +61,12 @@ pub struct BalanceSignals {
     pub v: [Vec<f64>; 2],
     /// Cart acceleration, m/s².
     pub a: [Vec<f64>; 2],
-    /// Motor command, N.
+    /// Motor command through the balance filter, N.
     pub u: [Vec<f64>; 2],
-    /// Sensor force (hand on handle, through the sensor), N.
+    /// Sensor force (hand on handle, through the sensor) through the balance filter, N.
     pub f: [Vec<f64>; 2],
+    /// The balance filter's taps ([`balance_filter`]).
+    pub force_taps: Vec<f64>,
     /// Evaluated sample indices.
     pub rows: Vec<usize>,
 }
@@ -98,6 +114,16 @@ impl BalanceSignals {
                 },
             )
         };
+        let taps = balance_filter(window, dt).map_err(|source| DiscrepancyError::Signal {
+            trial: entry.id,
+            source,
+        })?;
+        let force = |x: &[f64]| {
+            fir_clamped(&taps, x).map_err(|source| DiscrepancyError::Signal {
+                trial: entry.id,
+                source,
+            })
+        };
         let decim = ((rate_hz / EVALUATION_RATE_HZ).round() as usize).max(1);
         let half = window / 2;
         let rows = (half..n - half).step_by(decim).collect();
@@ -110,26 +136,20 @@ impl BalanceSignals {
             q: [sg(&trial.x_m, 0)?, sg(&trial.y_m, 0)?],
             v: [sg(&trial.x_m, 1)?, sg(&trial.y_m, 1)?],
             a: [sg(&trial.x_m, 2)?, sg(&trial.y_m, 2)?],
-            u: [sg(ux, 0)?, sg(uy, 0)?],
-            f: [sg(&trial.fx_n, 0)?, sg(&trial.fy_n, 0)?],
+            u: [force(ux)?, force(uy)?],
+            f: [force(&trial.fx_n)?, force(&trial.fy_n)?],
+            force_taps: taps,
             rows,
         }))
     }
 
-    /// The same smoothing applied to a column computed from this trial's samples.
+    /// The balance filter applied to a force column computed from this trial's samples
+    /// (a friction regressor), so that it enters the balance like the measured forces.
     ///
     /// # Errors
     /// A signal-processing error (a non-finite value in `x`).
     pub fn smooth(&self, x: &[f64]) -> Result<Vec<f64>, DiscrepancyError> {
-        savgol_filter(
-            x,
-            self.window,
-            SMOOTHING_ORDER,
-            0,
-            1.0 / self.rate_hz,
-            EdgeMode::Interp,
-        )
-        .map_err(|source| DiscrepancyError::Signal {
+        fir_clamped(&self.force_taps, x).map_err(|source| DiscrepancyError::Signal {
             trial: self.id,
             source,
         })
@@ -177,4 +197,46 @@ impl BalanceSignals {
         let hi = q.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         (hi - lo).max(0.0)
     }
+}
+
+/// The balance filter for a Savitzky–Golay `window` (cubic) at sample spacing `dt_s`:
+/// the taps `h` with `h ∗ [1, −2, 1] = dt² · c₂`, where `c₂` is the second-derivative
+/// Savitzky–Golay filter. `c₂` annihilates constants and lines, so `[1, −2, 1]`
+/// divides it exactly; the quotient has `window − 2` symmetric taps that sum to one
+/// (the filter passes a constant force unchanged, as `c₂` gives a parabola's
+/// curvature exactly).
+///
+/// # Errors
+/// A window or spacing that the Savitzky–Golay design refuses.
+pub fn balance_filter(window: usize, dt_s: f64) -> Result<Vec<f64>, SignalError> {
+    let c2 = savgol_coeffs(window, SMOOTHING_ORDER, 2, dt_s)?;
+    let mut h = vec![0.0; window.saturating_sub(2)];
+    for k in 0..h.len() {
+        let prev = if k >= 1 { h[k - 1] } else { 0.0 };
+        let prev2 = if k >= 2 { h[k - 2] } else { 0.0 };
+        h[k] = c2[k] * dt_s * dt_s + 2.0 * prev - prev2;
+    }
+    Ok(h)
+}
+
+/// `x` through the symmetric FIR `taps` (odd length), centred; samples beyond the ends
+/// are the end samples (only the half window at each end, outside the evaluated rows,
+/// sees them).
+fn fir_clamped(taps: &[f64], x: &[f64]) -> Result<Vec<f64>, SignalError> {
+    if let Some((index, value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(SignalError::NonFinite {
+            index,
+            value: *value,
+        });
+    }
+    let n = x.len() as isize;
+    let half = (taps.len() / 2) as isize;
+    Ok((0..n)
+        .map(|i| {
+            taps.iter()
+                .enumerate()
+                .map(|(k, h)| h * x[(i + half - k as isize).clamp(0, n - 1) as usize])
+                .sum()
+        })
+        .collect())
 }
