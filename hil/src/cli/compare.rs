@@ -17,7 +17,9 @@ Examples:
   rigtwin compare ../shared/recordings/example-friction --json > compare.json
   rigtwin diagnose ../shared/recordings/example-friction --write-model model.toml
   rigtwin compare ../shared/recordings/example-friction --model model.toml
-  rigtwin compare session/ --fit-trials 16 --fit-evaluations 90   (slower, closer fit)")]
+  rigtwin compare session/ --fit-trials 16 --fit-evaluations 90   (slower, closer fit)
+  rigtwin compare ../shared/recordings/example-none --rerun save=compare.rrd
+      (measured/ and simulated/ channels of every trial in one plot each; rerun compare.rrd)")]
 pub struct Args {
     /// Session directory (with session.toml).
     pub session: PathBuf,
@@ -33,6 +35,11 @@ pub struct Args {
     /// Evaluations of the subject fit at most.
     #[arg(long, value_name = "N", default_value_t = 45)]
     pub fit_evaluations: usize,
+    /// Also send every trial's measured channels (`measured/…`) and its simulated replay's
+    /// (`simulated/…`) to the rerun viewer, on the same timelines.
+    #[cfg(feature = "rerun")]
+    #[command(flatten)]
+    pub rerun: rigtwin::viz::RerunArgs,
 }
 
 fn mat(m: &[[f64; 2]; 2]) -> String {
@@ -177,8 +184,30 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut options = CompareOptions::default();
     options.fit.max_trials = args.fit_trials;
     options.fit.max_evaluations = args.fit_evaluations;
+    #[cfg(feature = "rerun")]
+    {
+        options.keep_simulated = args.rerun.rerun.is_some();
+    }
     let c = compare(&session, model.as_ref(), &options)
         .with_context(|| format!("replaying {}", args.session.display()))?;
+    #[cfg(feature = "rerun")]
+    if let Some(target) = &args.rerun.rerun {
+        let id = format!(
+            "{}-compare{}",
+            rigtwin::viz::recording_id(&session)?,
+            if model.is_some() { "-model" } else { "" }
+        );
+        let mut viewer = rigtwin::viz::Viewer::new(target, "rigtwin", &id)
+            .with_context(|| format!("opening --rerun {target}"))?;
+        let sent = rigtwin::viz::log_replay_overlay(&mut viewer, &session, &c.simulated)?;
+        viewer
+            .finish()
+            .with_context(|| format!("finishing --rerun {target}"))?;
+        eprintln!(
+            "rerun: {} trials, {} measured and {} simulated samples sent to {target} (recording {id})",
+            sent.trials, sent.measured_samples, sent.simulated_samples
+        );
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());

@@ -19,7 +19,10 @@ use rigtwin::session::Session;
 Examples:
   rigtwin diagnose ../shared/recordings/example-friction
   rigtwin diagnose ../shared/recordings/example-none --json --write-model model.toml
-  rigtwin diagnose session/ --report-dir /tmp/diag --folds 4")]
+  rigtwin diagnose session/ --report-dir /tmp/diag --folds 4
+  rigtwin diagnose ../shared/recordings/example-friction --rerun save=diagnose.rrd
+      (the session, and on every held-out trial the motor command predicted by the
+       baseline and each candidate under predicted/plots/command; rerun diagnose.rrd)")]
 pub struct Args {
     /// Session directory (with session.toml).
     pub session: PathBuf,
@@ -44,6 +47,12 @@ pub struct Args {
     /// Smallest held-out gain that names a cause (fraction).
     #[arg(long, default_value_t = 0.10)]
     pub min_gain: f64,
+    /// Also send the session, and for every trial the motor command the balance predicts
+    /// with the baseline and each candidate fitted without it (`predicted/…`), to the rerun
+    /// viewer.
+    #[cfg(feature = "rerun")]
+    #[command(flatten)]
+    pub rerun: rigtwin::viz::RerunArgs,
 }
 
 /// Runs `rigtwin diagnose`.
@@ -68,6 +77,21 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let analysis = diagnose(&session, &opts)
         .with_context(|| format!("diagnosing {}", args.session.display()))?;
     let d = &analysis.diagnosis;
+    #[cfg(feature = "rerun")]
+    if let Some(target) = &args.rerun.rerun {
+        let id = format!("{}-diagnose", rigtwin::viz::recording_id(&session)?);
+        let mut viewer = rigtwin::viz::Viewer::new(target, "rigtwin", &id)
+            .with_context(|| format!("opening --rerun {target}"))?;
+        rigtwin::viz::log_session(&mut viewer, &session)?;
+        let sent = rigtwin::viz::log_diagnosis_overlay(&mut viewer, &session, &analysis)?;
+        viewer
+            .finish()
+            .with_context(|| format!("finishing --rerun {target}"))?;
+        eprintln!(
+            "rerun: session and {} held-out trials ({} rows of the command, {} predicted) sent to {target} (recording {id})",
+            sent.trials, sent.measured_samples, sent.simulated_samples
+        );
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(d)?);
     } else {

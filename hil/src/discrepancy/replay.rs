@@ -89,6 +89,10 @@ pub struct Comparison {
     pub impedance: Option<ImpedanceComparison>,
     /// How the numbers were made, and what could not be done.
     pub notes: Vec<String>,
+    /// The simulated replay of every trial, in session order, when
+    /// [`CompareOptions::keep_simulated`] asks for it (empty otherwise; not in the JSON).
+    #[serde(skip)]
+    pub simulated: Vec<Trial>,
 }
 
 /// How [`compare`] runs.
@@ -96,6 +100,8 @@ pub struct Comparison {
 pub struct CompareOptions {
     /// The subject fit.
     pub fit: FitOptions,
+    /// Keep the simulated tables in [`Comparison::simulated`] (for the viewer overlay).
+    pub keep_simulated: bool,
 }
 
 #[derive(Default, Clone, Copy)]
@@ -433,6 +439,11 @@ pub fn compare(
         frequency,
         impedance,
         notes,
+        simulated: if options.keep_simulated {
+            replays.into_iter().map(|r| r.table).collect()
+        } else {
+            Vec::new()
+        },
     })
 }
 

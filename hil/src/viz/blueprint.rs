@@ -58,6 +58,13 @@ fn series(name: &'static str, origin: &'static str) -> Node {
     view(name, "TimeSeries", origin, &["$origin/**"])
 }
 
+/// A time-series view that also holds the overlays of its channels (`contents`: the
+/// origin's and the `measured/`, `simulated/` or `predicted/` copies of it), so measured
+/// and simulated curves share one plot.
+fn overlaid(name: &'static str, origin: &'static str, contents: &'static [&'static str]) -> Node {
+    view(name, "TimeSeries", origin, contents)
+}
+
 fn container(
     name: &'static str,
     kind: ContainerKind,
@@ -106,16 +113,49 @@ fn layout() -> Node {
         ContainerKind::Vertical,
         &[1.0, 1.0, 1.0],
         vec![
-            series("Position (m)", "/plots/position"),
-            series("Force (N)", "/plots/force"),
+            overlaid(
+                "Position (m)",
+                "/plots/position",
+                &[
+                    "$origin/**",
+                    "/measured/plots/position/**",
+                    "/simulated/plots/position/**",
+                ],
+            ),
+            overlaid(
+                "Force (N)",
+                "/plots/force",
+                &[
+                    "$origin/**",
+                    "/measured/plots/force/**",
+                    "/simulated/plots/force/**",
+                ],
+            ),
             container(
                 "More signals",
                 ContainerKind::Tabs,
                 &[],
                 vec![
-                    series("Velocity (m/s)", "/plots/velocity"),
+                    overlaid(
+                        "Velocity (m/s)",
+                        "/plots/velocity",
+                        &[
+                            "$origin/**",
+                            "/measured/plots/velocity/**",
+                            "/simulated/plots/velocity/**",
+                        ],
+                    ),
                     series("Reference (m)", "/plots/reference"),
-                    series("Command (N)", "/plots/command"),
+                    overlaid(
+                        "Command (N)",
+                        "/plots/command",
+                        &[
+                            "$origin/**",
+                            "/measured/plots/command/**",
+                            "/simulated/plots/command/**",
+                            "/predicted/plots/command/**",
+                        ],
+                    ),
                     series("Arm angles (deg)", "/plots/arm"),
                     series("Response (mm)", "/plots/response"),
                 ],

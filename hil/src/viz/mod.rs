@@ -32,6 +32,7 @@ mod blueprint;
 mod columns;
 mod geometry;
 mod ids;
+mod overlay;
 pub mod paths;
 mod session;
 mod sink;
@@ -46,6 +47,7 @@ pub use geometry::{
     Elbow, EllipseAxes, RESPONSE_WINDOW_S, Response, ellipse_axes, ellipse_outline,
     two_link_inverse, variational_response,
 };
+pub use overlay::{Overlaid, OverlayError, log_diagnosis_overlay, log_replay_overlay};
 pub use session::{ARM_ANGLE_COLUMNS, Logged, log_session, recording_id};
 pub use target::{RerunArgs, Target, TargetParseError};
 pub use viewer::{DEFAULT_LIVE_RATE_HZ, Viewer};

@@ -26,6 +26,12 @@
 //! ellipses/<name>/outline  the image of the unit circle under the matrix (scaled)
 //! ellipses/<name>/axes     its principal semi-axes, labelled with the matrix
 //! events                   text log
+//!
+//! overlays (`rigtwin compare --rerun`, `rigtwin diagnose --rerun`):
+//! measured/plots/<series>         per sample  a measured channel, as under plots/
+//! simulated/plots/<series>        per sample  the same channel of the simulated replay
+//! predicted/plots/command/{x,y}/<model>  per evaluated row  motor command the cart force
+//!                                 balance of <model> predicts (`measured`: the command there)
 //! ```
 
 /// Root of the 2D scene.
@@ -70,6 +76,26 @@ pub const RESPONSE_Y: &str = "plots/response/y_mm";
 pub const ARM_SHOULDER_DEG: &str = "plots/arm/shoulder_deg";
 /// Elbow angle.
 pub const ARM_ELBOW_DEG: &str = "plots/arm/elbow_deg";
+
+/// Prefix of the measured channels in an overlay.
+pub const MEASURED: &str = "measured";
+/// Prefix of the simulated channels in an overlay.
+pub const SIMULATED: &str = "simulated";
+/// Root of the motor command predicted by a force-balance model.
+pub const PREDICTED_COMMAND: &str = "predicted/plots/command";
+
+/// The overlay entity of a trial column under `prefix` (`simulated`, `x_m` →
+/// `simulated/plots/position/x`), `None` for `t_s` and unknown names.
+pub fn overlay_series(prefix: &str, column: &str) -> Option<String> {
+    series(column).map(|s| format!("{prefix}/{s}"))
+}
+
+/// The entity of the motor command on `axis` (0 = x, 1 = y) predicted by `model`
+/// (`baseline`, a candidate's name, or `measured` for the command itself).
+pub fn predicted_command(axis: usize, model: &str) -> String {
+    let a = if axis == 0 { "x" } else { "y" };
+    format!("{PREDICTED_COMMAND}/{a}/{model}")
+}
 
 /// The time-series entity of a trial column (`x_m` → `plots/position/x`), `None` for `t_s`
 /// and unknown names.

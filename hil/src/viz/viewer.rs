@@ -45,7 +45,7 @@ pub struct Viewer {
     live_rate_hz: f64,
     next_offset_s: f64,
     geometry: RigGeometry,
-    styled: BTreeSet<&'static str>,
+    styled: BTreeSet<String>,
     shoulder_logged: bool,
 }
 
@@ -445,8 +445,7 @@ impl Viewer {
                 ]
             })
             .collect();
-        if !self.styled.contains(paths::ARM_LINKS) {
-            self.styled.insert(paths::ARM_LINKS);
+        if self.styled.insert(paths::ARM_LINKS.to_owned()) {
             self.send_static(
                 paths::ARM_LINKS,
                 &LineStrips2D::update_fields()
@@ -566,6 +565,14 @@ impl Viewer {
         self.next_offset_s
     }
 
+    /// Lays the next trial no earlier than `offset_s` (session time, s): for callers that
+    /// log a trial's series themselves with [`Self::log_series`] on a span they built.
+    pub fn skip_to_offset_s(&mut self, offset_s: f64) {
+        if offset_s.is_finite() && offset_s > self.next_offset_s {
+            self.next_offset_s = offset_s;
+        }
+    }
+
     /// The stamp of a session time (trial unknown).
     pub fn stamp_at(&self, time_s: f64) -> Stamp {
         Stamp {
@@ -575,6 +582,45 @@ impl Viewer {
         }
     }
 
+    /// Logs one series of a trial at any entity path (overlays: `measured/…`, `simulated/…`):
+    /// `values[i]` at trial time `t_s[i]` (increasing; thinned for a live viewer as in
+    /// [`Self::log_trial`], at the mean rate of `t_s`). `name` is the legend and `rgb` the colour, both set the first
+    /// time a path is logged. `span` is where the trial landed (from [`Self::log_trial`], or
+    /// built by the caller to lay several series on the same trial).
+    pub fn log_series(
+        &mut self,
+        path: &str,
+        name: &str,
+        rgb: [u8; 3],
+        span: &TrialSpan,
+        t_s: &[f64],
+        values: &[f64],
+    ) -> Result<(), VizError> {
+        if values.len() != t_s.len() {
+            return Err(VizError::ColumnLength {
+                column: "values",
+                len: values.len(),
+                expected: t_s.len(),
+            });
+        }
+        if path.trim().is_empty() {
+            return Err(VizError::InvalidId {
+                id: path.to_owned(),
+                reason: "a series needs an entity path".to_owned(),
+            });
+        }
+        let n = t_s.len();
+        let stride = match (t_s.first(), t_s.last()) {
+            (Some(a), Some(b)) if n > 1 && b > a => self.stride((n - 1) as f64 / (b - a)),
+            _ => 1,
+        };
+        let picks: Vec<usize> = (0..n).step_by(stride).collect();
+        let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
+        let times = Times::of(&stamps);
+        let color = Color::from_rgb(rgb[0], rgb[1], rgb[2]);
+        self.send_series_colored(path, name, color, &times, picks.iter().map(|&i| values[i]))
+    }
+
     fn send_series(
         &mut self,
         path: &'static str,
@@ -582,13 +628,21 @@ impl Viewer {
         times: &Times,
         values: impl Iterator<Item = f64>,
     ) -> Result<(), VizError> {
-        if !self.styled.contains(path) {
-            self.styled.insert(path);
+        self.send_series_colored(path, name, series_color(path), times, values)
+    }
+
+    fn send_series_colored(
+        &mut self,
+        path: &str,
+        name: &str,
+        color: Color,
+        times: &Times,
+        values: impl Iterator<Item = f64>,
+    ) -> Result<(), VizError> {
+        if self.styled.insert(path.to_owned()) {
             self.send_static(
                 path,
-                &SeriesLines::new()
-                    .with_names([name])
-                    .with_colors([series_color(path)]),
+                &SeriesLines::new().with_names([name]).with_colors([color]),
             )?;
         }
         self.send_columns(

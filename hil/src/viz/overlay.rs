@@ -1,0 +1,256 @@
+//! Measured against simulated in one plot: the overlays of `rigtwin compare --rerun` and
+//! `rigtwin diagnose --rerun`.
+//!
+//! - [`log_replay_overlay`]: every trial's measured channels under `measured/plots/…` and
+//!   its simulated replay's under `simulated/plots/…`, both stamped on the same trial span,
+//!   so the position, force, velocity and command plots of the layout show the two curves
+//!   of each channel on top of each other.
+//! - [`log_diagnosis_overlay`]: for every trial the diagnosis used, held out in its
+//!   cross-validation fold, the motor command the cart force balance predicts with the
+//!   baseline and with each candidate effect (fitted without that trial) next to the
+//!   command on the same rows, under `predicted/plots/command/{x,y}/<model>`.
+//!
+//! Entity paths are in [`super::paths`].
+
+use super::columns::{Stamp, TrialColumns, TrialSpan};
+use super::{EventLevel, Viewer, VizError, paths};
+use crate::discrepancy::{Analysis, Baseline, Candidate as _, DiscrepancyError, Folds};
+use crate::session::{Session, Trial};
+
+/// Colours of the measured x and y channels.
+const MEASURED_RGB: [[u8; 3]; 2] = [[200, 50, 30], [30, 80, 200]];
+/// Colours of the simulated x and y channels (lighter, so the measured curve stays on top).
+const SIMULATED_RGB: [[u8; 3]; 2] = [[250, 150, 120], [120, 170, 250]];
+/// Colours of the predicted commands: the command itself, the baseline, then candidates.
+const MODEL_RGB: [[u8; 3]; 6] = [
+    [40, 40, 40],
+    [30, 90, 200],
+    [210, 60, 40],
+    [40, 160, 80],
+    [170, 60, 170],
+    [220, 150, 30],
+];
+
+/// What an overlay sent.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Overlaid {
+    /// Trials overlaid.
+    pub trials: usize,
+    /// Samples of the first kind (measured; for a diagnosis, evaluated rows), all trials.
+    pub measured_samples: usize,
+    /// Samples of the second kind (simulated; for a diagnosis, predicted rows of every
+    /// model), all trials.
+    pub simulated_samples: usize,
+}
+
+/// What can go wrong while building a diagnosis overlay.
+#[derive(Debug, thiserror::Error)]
+pub enum OverlayError {
+    /// Sending to the viewer failed.
+    #[error(transparent)]
+    Viz(#[from] VizError),
+    /// A model's prediction could not be computed.
+    #[error("predicting the motor command: {0}")]
+    Discrepancy(#[from] DiscrepancyError),
+}
+
+/// The columns of a session table, as [`TrialColumns`].
+fn columns_of(trial: &Trial) -> TrialColumns<'_> {
+    TrialColumns {
+        vx_m_per_s: trial.vx_m_per_s.as_deref(),
+        vy_m_per_s: trial.vy_m_per_s.as_deref(),
+        ref_x_m: trial.ref_x_m.as_deref(),
+        ref_y_m: trial.ref_y_m.as_deref(),
+        cmd_fx_n: trial.cmd_fx_n.as_deref(),
+        cmd_fy_n: trial.cmd_fy_n.as_deref(),
+        ..TrialColumns::required(
+            &trial.t_s,
+            &trial.x_m,
+            &trial.y_m,
+            &trial.fx_n,
+            &trial.fy_n,
+            &trial.pert_fx_n,
+            &trial.pert_fy_n,
+        )
+    }
+}
+
+/// The axis of a column: 1 when its series entity ends in `y` (`…/y`, `…/sensor_y`).
+fn axis_of(column: &str) -> usize {
+    usize::from(paths::series(column).is_some_and(|p| p.ends_with('y')))
+}
+
+/// Logs every channel of `trial` under `prefix` on `span`; returns the samples.
+fn log_prefixed(
+    viewer: &mut Viewer,
+    prefix: &str,
+    rgb: &[[u8; 3]; 2],
+    span: &TrialSpan,
+    trial: &Trial,
+) -> Result<usize, VizError> {
+    let columns = columns_of(trial);
+    columns.check()?;
+    for (name, values) in columns.named() {
+        if let Some(path) = paths::overlay_series(prefix, name) {
+            let legend = format!("{name} {prefix}");
+            viewer.log_series(
+                &path,
+                &legend,
+                rgb[axis_of(name)],
+                span,
+                columns.t_s,
+                values,
+            )?;
+        }
+    }
+    Ok(trial.len())
+}
+
+/// Logs each trial of `session` under `measured/` and `simulated[i]`, its replay, under
+/// `simulated/`, trial by trial on the same span (trials end to end in manifest order, each
+/// as long as the longer of the two tables), with an event naming the trial at its start.
+///
+/// `simulated` pairs with the session's trials in order (as [`crate::discrepancy::compare`]
+/// keeps them); trials without a replay are not logged.
+pub fn log_replay_overlay(
+    viewer: &mut Viewer,
+    session: &Session,
+    simulated: &[Trial],
+) -> Result<Overlaid, VizError> {
+    let rate_hz = session.manifest.rate_hz;
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(VizError::NotPositive {
+            what: "session rate_hz",
+            value: rate_hz,
+        });
+    }
+    let mut out = Overlaid::default();
+    for (index, ((entry, measured), sim)) in session.iter().zip(simulated).enumerate() {
+        let span = TrialSpan {
+            trial_index: u32::try_from(index).unwrap_or(u32::MAX),
+            offset_s: viewer.next_trial_offset_s(),
+            duration_s: measured.len().max(sim.len()) as f64 / rate_hz,
+        };
+        viewer.log_event(
+            span.stamp(0.0),
+            EventLevel::Info,
+            &format!(
+                "trial {} ({}): measured {} samples, simulated {}",
+                entry.id,
+                entry.kind.as_str(),
+                measured.len(),
+                sim.len()
+            ),
+        )?;
+        out.measured_samples +=
+            log_prefixed(viewer, paths::MEASURED, &MEASURED_RGB, &span, measured)?;
+        out.simulated_samples +=
+            log_prefixed(viewer, paths::SIMULATED, &SIMULATED_RGB, &span, sim)?;
+        out.trials += 1;
+        viewer.skip_to_offset_s(span.offset_s + span.duration_s);
+    }
+    Ok(out)
+}
+
+/// Logs, after the session itself (see [`super::log_session`], logged first on the same
+/// viewer, so the trials' spans are known), the motor command the cart force balance
+/// predicts on every trial the diagnosis used, with each model fitted on the folds that hold
+/// the trial out: `baseline` (the nominal balance) and every judged candidate by name, next
+/// to `measured` (the command on the same evaluated rows).
+///
+/// Returns the evaluated rows in `measured_samples` and the predicted rows of all models
+/// in `simulated_samples`.
+pub fn log_diagnosis_overlay(
+    viewer: &mut Viewer,
+    session: &Session,
+    analysis: &Analysis,
+) -> Result<Overlaid, OverlayError> {
+    let mut out = Overlaid::default();
+    let Some(base) = &analysis.baseline else {
+        return Ok(out);
+    };
+    let rate_hz = session.manifest.rate_hz;
+    // The spans `log_session` gave each trial: end to end, n / rate each.
+    let mut spans = Vec::with_capacity(session.trials.len());
+    let mut offset_s = 0.0;
+    for (index, (entry, trial)) in session.iter().enumerate() {
+        let span = TrialSpan {
+            trial_index: u32::try_from(index).unwrap_or(u32::MAX),
+            offset_s,
+            duration_s: trial.len() as f64 / rate_hz,
+        };
+        offset_s += span.duration_s;
+        spans.push((entry.id, span, trial));
+    }
+    let folds = Folds::interleaved(analysis.signals.len(), analysis.diagnosis.folds);
+    for (i, sig) in analysis.signals.iter().enumerate() {
+        let Some((_, span, trial)) = spans.iter().find(|(id, _, _)| *id == sig.id) else {
+            continue;
+        };
+        let Some(&fold) = folds.of_trial.get(i) else {
+            continue;
+        };
+        let Some(bf) = base.folds.get(fold) else {
+            continue;
+        };
+        let t_s: Vec<f64> = sig
+            .rows
+            .iter()
+            .map(|&r| trial.t_s.get(r).copied().unwrap_or(r as f64 / sig.rate_hz))
+            .collect();
+        let u = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
+        let mut models: Vec<(&str, [Vec<f64>; 2])> = vec![(
+            "baseline",
+            Baseline.residual(sig, 0, &bf.beta, analysis.latency_s)?,
+        )];
+        for cf in &analysis.fits {
+            if let Some(f) = cf.fit.folds.get(fold) {
+                let r = cf
+                    .candidate
+                    .residual(sig, f.setting, &f.beta, analysis.latency_s)?;
+                models.push((cf.candidate.name(), r));
+            }
+        }
+        for axis in 0..2 {
+            viewer.log_series(
+                &paths::predicted_command(axis, paths::MEASURED),
+                &format!("{} measured", ["x", "y"][axis]),
+                MODEL_RGB[0],
+                span,
+                &t_s,
+                &u[axis],
+            )?;
+            out.measured_samples += t_s.len();
+            for (k, (model, residual)) in models.iter().enumerate() {
+                let predicted: Vec<f64> = u[axis]
+                    .iter()
+                    .zip(&residual[axis])
+                    .map(|(u, r)| u - r)
+                    .collect();
+                if predicted.len() != t_s.len() {
+                    continue;
+                }
+                viewer.log_series(
+                    &paths::predicted_command(axis, model),
+                    &format!("{} {model}", ["x", "y"][axis]),
+                    MODEL_RGB[(k + 1).min(MODEL_RGB.len() - 1)],
+                    span,
+                    &t_s,
+                    &predicted,
+                )?;
+                out.simulated_samples += predicted.len();
+            }
+        }
+        let at: Stamp = span.stamp(t_s.first().copied().unwrap_or(0.0));
+        viewer.log_event(
+            at,
+            EventLevel::Info,
+            &format!(
+                "trial {}: force balance predicted with the models fitted without fold {fold}",
+                sig.id
+            ),
+        )?;
+        out.trials += 1;
+    }
+    Ok(out)
+}
