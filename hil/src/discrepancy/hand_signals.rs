@@ -124,8 +124,78 @@ pub struct HandResponse {
     pub s: Vec<Matrix2<f64>>,
     /// Evaluated local indices (from the onset to the end of the window).
     pub rows: Vec<usize>,
-    /// Unperturbed trials in the reference.
+    /// Unperturbed trials in the reference (summed over the averaged trials).
     pub references: usize,
+    /// The perturbed trials averaged into this response (one unless
+    /// [`average_by_angle`] merged repetitions).
+    pub trials: Vec<u32>,
+}
+
+/// Fewest distinct pulse directions for which repetitions are averaged (and the folds
+/// run over directions); with fewer, every trial is its own unit.
+pub const MIN_ANGLES_TO_AVERAGE: usize = 6;
+
+/// Averages the responses of repeated pulses in the same direction (a whole number of
+/// degrees apart counts as the same): the balance is linear in every signal, so the
+/// average obeys it too, while the arm's motor noise, which is independent between
+/// repetitions and dominates a single response (hand-balance NRMSE 0.25 with noise,
+/// 0.04 without, on the project's arm), drops by √n. Returns the responses unchanged
+/// when they span fewer than [`MIN_ANGLES_TO_AVERAGE`] directions.
+#[must_use]
+pub fn average_by_angle(responses: Vec<HandResponse>) -> Vec<HandResponse> {
+    let key = |r: &HandResponse| r.angle_deg.rem_euclid(360.0).round() as i64;
+    let mut keys: Vec<i64> = responses.iter().map(key).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    let same_shape = responses.windows(2).all(|w| {
+        w[0].df[0].len() == w[1].df[0].len()
+            && w[0].onset == w[1].onset
+            && w[0].rate_hz == w[1].rate_hz
+    });
+    if keys.len() < MIN_ANGLES_TO_AVERAGE || keys.len() == responses.len() || !same_shape {
+        return responses;
+    }
+    keys.iter()
+        .filter_map(|k| {
+            let group: Vec<&HandResponse> = responses.iter().filter(|r| key(r) == *k).collect();
+            let first = *group.first()?;
+            let w = 1.0 / group.len() as f64;
+            let mean = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| -> Vec<f64> {
+                let mut out = vec![0.0; f(first).len()];
+                for r in &group {
+                    for (o, v) in out.iter_mut().zip(f(r)) {
+                        *o += w * v;
+                    }
+                }
+                out
+            };
+            let mean_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| -> Vec<Matrix2<f64>> {
+                let mut out = vec![Matrix2::zeros(); f(first).len()];
+                for r in &group {
+                    for (o, v) in out.iter_mut().zip(f(r)) {
+                        *o += v * w;
+                    }
+                }
+                out
+            };
+            Some(HandResponse {
+                id: first.id,
+                rate_hz: first.rate_hz,
+                onset: first.onset,
+                angle_deg: first.angle_deg,
+                dx: [mean(&|r| &r.dx[0]), mean(&|r| &r.dx[1])],
+                dv: [mean(&|r| &r.dv[0]), mean(&|r| &r.dv[1])],
+                da: [mean(&|r| &r.da[0]), mean(&|r| &r.da[1])],
+                df: [mean(&|r| &r.df[0]), mean(&|r| &r.df[1])],
+                dfd: [mean(&|r| &r.dfd[0]), mean(&|r| &r.dfd[1])],
+                m_arm: mean_mat(&|r| &r.m_arm),
+                s: mean_mat(&|r| &r.s),
+                rows: first.rows.clone(),
+                references: group.iter().map(|r| r.references).sum(),
+                trials: group.iter().flat_map(|r| r.trials.clone()).collect(),
+            })
+        })
+        .collect()
 }
 
 /// One trial's smoothed channels.
@@ -189,7 +259,7 @@ fn smooth(
 
 /// Linear interpolation of `x` at fractional index `t`; `None` outside.
 fn interp(x: &[f64], t: f64) -> Option<f64> {
-    if !(t >= 0.0) || t > (x.len() - 1) as f64 {
+    if t.is_nan() || t < 0.0 || t > (x.len() - 1) as f64 {
         return None;
     }
     let k = t.floor() as usize;
@@ -330,6 +400,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 s,
                 rows: (lead..n).step_by(decim).collect(),
                 references: aligned.len(),
+                trials: vec![e.id],
             }))
         })
         .collect::<Result<_, _>>()?;
@@ -360,21 +431,24 @@ mod tests {
     fn crossing_is_interpolated_and_directed() {
         let y = [0.0, 1.0, 2.0, 1.0, 0.0];
         // Rising through 1.5 between samples 1 and 2; falling between 2 and 3.
-        assert!((crossing(&y, 1.5, 1.0).unwrap() - 1.5).abs() < 1e-12);
-        assert!((crossing(&y, 1.5, -1.0).unwrap() - 2.5).abs() < 1e-12);
+        assert!((crossing(&y, 1.5, 1.0).unwrap_or(f64::NAN) - 1.5).abs() < 1e-12);
+        assert!((crossing(&y, 1.5, -1.0).unwrap_or(f64::NAN) - 2.5).abs() < 1e-12);
         assert!(crossing(&y, 3.0, 1.0).is_none());
     }
 
     #[test]
     fn endpoint_inertia_is_symmetric_and_positive() {
+        let Ok(model) = MuscleModel::new(&ArmParams::default().muscles) else {
+            panic!("the default muscles are valid");
+        };
         let arm = HandArm {
             params: ArmParams::default(),
             shoulder_m: [0.0, -0.425],
-            ata: MuscleModel::new(&ArmParams::default().muscles)
-                .unwrap()
-                .to_joint(&[1.0; MUSCLES]),
+            ata: model.to_joint(&[1.0; MUSCLES]),
         };
-        let (m, s) = arm.at([0.0, 0.0]).unwrap();
+        let Some((m, s)) = arm.at([0.0, 0.0]) else {
+            panic!("the workspace centre is reachable");
+        };
         // Symmetric to round-off, positive definite (physical inertia and a Gram matrix).
         assert!((m[(0, 1)] - m[(1, 0)]).abs() < 1e-12);
         assert!((s[(0, 1)] - s[(1, 0)]).abs() < 1e-12);
