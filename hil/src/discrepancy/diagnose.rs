@@ -156,6 +156,9 @@ pub struct Diagnosis {
     pub cart_baseline_nrmse: Option<f64>,
     /// Perturbed trials whose response the hand balance used.
     pub hand_trials_used: usize,
+    /// Units the hand balance's folds run over: pulse directions (repetitions averaged)
+    /// or single trials.
+    pub hand_units: usize,
     /// Held-out NRMSE of the hand balance's baseline (the arm's known inertia, fitted
     /// D, K and delayed feedback), normalised by the hand's response force.
     pub hand_baseline_nrmse: Option<f64>,
@@ -287,6 +290,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         baseline: BTreeMap::new(),
         cart_baseline_nrmse: None,
         hand_trials_used: 0,
+        hand_units: 0,
         hand_baseline_nrmse: None,
         hand_baseline: BTreeMap::new(),
         ranking: Vec::new(),
@@ -399,7 +403,8 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let hand = match hand {
         Ok(h) => {
             let base_nrmse = h.baseline.nrmse();
-            d.hand_trials_used = h.responses.len();
+            d.hand_trials_used = h.responses.iter().map(|r| r.trials.len()).sum();
+            d.hand_units = h.responses.len();
             d.hand_baseline_nrmse = Some(base_nrmse);
             d.hand_baseline = baseline_parameters(&h.baseline.beta, h.fb_delay_s)
                 .into_iter()
@@ -547,9 +552,10 @@ fn evidence(
     if let (Some(h), Some(nrmse)) = (hand, d.hand_baseline_nrmse) {
         let p = |k: &str| d.hand_baseline.get(k).copied().unwrap_or(f64::NAN);
         ev.push(format!(
-            "hand balance baseline ({} perturbed trials, {} s response windows, the arm's inertia from segment lengths): \
+            "hand balance baseline ({} perturbed trials as {} averaged responses, {} s windows, the arm's inertia from segment lengths): \
              D = [{:.1} {:.1}; {:.1} {:.1}] N s/m, K = [{:.0} {:.0}; {:.0} {:.0}] N/m, delayed feedback {:.0} ms with \
              gains {:.0} N/m, {:.1} N s/m; held-out NRMSE {:.4}",
+            d.hand_trials_used,
             h.responses.len(),
             super::hand_signals::HAND_WINDOW_S,
             p("d11_n_s_per_m"),

@@ -62,8 +62,9 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
-            "hand balance  {} perturbed trials, arm inertia from segment lengths, feedback delay {:.0} ms, held-out NRMSE {:.4}",
+            "hand balance  {} perturbed trials as {} responses, arm inertia from segment lengths, feedback delay {:.0} ms, held-out NRMSE {:.4}",
             d.hand_trials_used,
+            d.hand_units,
             d.hand_baseline
                 .get("feedback_delay_ms")
                 .copied()
@@ -414,8 +415,8 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
     }
 }
 
-/// A held-out perturbed trial of fold 0, y axis: the hand's response force the arm's
-/// inertia does not explain, measured vs baseline vs extended.
+/// A held-out perturbed response of fold 0, y axis: the hand's response force,
+/// measured vs baseline vs extended (each fitted without it).
 fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
     let ti = (0..h.responses.len()).find(|i| h.folds.of_trial.get(*i) == Some(&0))?;
     let r = &h.responses[ti];
@@ -423,11 +424,13 @@ fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
     let base = hand_fit_rows(&HandBaseline, r, 0, &bf.beta, h.fb_delay_s);
     let ext = hand_fit_rows(hf.candidate.as_ref(), r, ef.setting, &ef.beta, h.fb_delay_s);
     let t = |k: usize| (r.rows[k / 2] as f64 - r.onset as f64) / r.rate_hz;
+    // Each model's prediction of −ΔF_hand: its fit plus its own known inertia term
+    // (`−ΔF − y`, which differs between models when the grip moves the hand).
     let pick = |rows: &[(f64, f64, f64)], measured: bool| -> Vec<(f64, f64)> {
         rows.iter()
             .enumerate()
             .filter(|(k, _)| k % 2 == 1)
-            .map(|(k, (y, f, _))| (t(k), if measured { *y } else { *f }))
+            .map(|(k, (y, f, n))| (t(k), if measured { -n } else { f - n - y }))
             .collect()
     };
     Some(Figure {
@@ -436,7 +439,7 @@ fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
             r.id
         ),
         x_desc: "time since the pulse onset (s)".into(),
-        y_desc: "−ΔF_hand − M_arm Δa (N)".into(),
+        y_desc: "−ΔF_hand (N)".into(),
         series: vec![
             Series {
                 label: "measured".into(),
