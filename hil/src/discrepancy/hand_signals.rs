@@ -436,6 +436,49 @@ mod tests {
         assert!(crossing(&y, 3.0, 1.0).is_none());
     }
 
+    fn response(id: u32, angle_deg: f64, value: f64) -> HandResponse {
+        let v = vec![value; 4];
+        HandResponse {
+            id,
+            rate_hz: 1000.0,
+            onset: 1,
+            angle_deg,
+            dx: [v.clone(), v.clone()],
+            dv: [v.clone(), v.clone()],
+            da: [v.clone(), v.clone()],
+            df: [v.clone(), v.clone()],
+            dfd: [v.clone(), v],
+            m_arm: vec![Matrix2::identity() * value; 4],
+            s: vec![Matrix2::identity(); 4],
+            rows: vec![1, 2, 3],
+            references: 2,
+            trials: vec![id],
+        }
+    }
+
+    /// Repetitions of a direction become their mean (the balance is linear, so the mean
+    /// obeys it); with fewer directions than the threshold nothing is merged.
+    #[test]
+    fn repetitions_of_a_direction_are_averaged() {
+        let mut rs = Vec::new();
+        for k in 0..MIN_ANGLES_TO_AVERAGE {
+            let angle = 30.0 + 45.0 * k as f64;
+            rs.push(response(2 * k as u32, angle, 1.0));
+            rs.push(response(2 * k as u32 + 1, angle + 360.0, 3.0));
+        }
+        let avg = average_by_angle(rs.clone());
+        assert_eq!(avg.len(), MIN_ANGLES_TO_AVERAGE);
+        for a in &avg {
+            assert_eq!(a.trials.len(), 2);
+            assert_eq!(a.references, 4);
+            // Mean of 1 and 3, exactly representable.
+            assert!(a.df[1].iter().all(|v| *v == 2.0));
+            assert!(a.m_arm.iter().all(|m| m[(0, 0)] == 2.0 && m[(0, 1)] == 0.0));
+        }
+        let few: Vec<HandResponse> = rs.into_iter().take(4).collect();
+        assert_eq!(average_by_angle(few).len(), 4);
+    }
+
     #[test]
     fn endpoint_inertia_is_symmetric_and_positive() {
         let Ok(model) = MuscleModel::new(&ArmParams::default().muscles) else {
