@@ -435,8 +435,8 @@ fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
     };
     Some(Figure {
         title: format!(
-            "held-out perturbed trial {} (y axis): hand response force",
-            r.id
+            "held-out response to the pulse at {:.0}° (trials {:?}), y axis: hand force",
+            r.angle_deg, r.trials
         ),
         x_desc: "time since the pulse onset (s)".into(),
         y_desc: "−ΔF_hand (N)".into(),
