@@ -6,7 +6,7 @@
 //! angles) against a drawn virtual subject (not the nominal one), with the world's
 //! sensor noise and encoder quantum, recorded at 1 kHz as 4-tick block means like the
 //! shared emulated rig, without ground-truth columns. The hidden effect is drawn from
-//! the plant-side catalog with parameters in realistic ranges ([`draw`]).
+//! the catalog, plant side or human side, with parameters in realistic ranges ([`draw`]).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -16,16 +16,22 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options};
+use rigtwin_arm::params::StretchReflex;
 use rigtwin_world::PlantEffects;
-use rigtwin_world::config::{ActuationDelay, ForceRipple, RailFriction, SensorEffect};
+use rigtwin_world::config::{
+    ActuationDelay, ForceRipple, GripCompliance, HandleMass, RailFriction, SensorEffect,
+};
 
 /// The effects a generated session may hide (`none` hides nothing).
-pub const EFFECTS: [&str; 5] = [
+pub const EFFECTS: [&str; 8] = [
     "none",
     "rail-friction",
     "force-ripple",
     "actuation-delay",
     "sensor-rotation",
+    "stretch-reflex",
+    "grip-compliance",
+    "handle-mass",
 ];
 
 /// The 4 kHz control tick, s (the world rounds delays to whole ticks).
@@ -41,6 +47,8 @@ pub struct Hidden {
     pub parameters: BTreeMap<String, f64>,
     /// What the world simulates.
     pub effects: PlantEffects,
+    /// The subject's stretch reflex (`stretch-reflex`), put into the protocol's arm.
+    pub stretch_reflex: Option<StretchReflex>,
 }
 
 /// Draws the parameters of `effect` from realistic ranges; `None` for an unknown name.
@@ -53,9 +61,21 @@ pub struct Hidden {
 /// - `sensor-rotation`: ±10–25° (a sensor mounted one bolt hole off its index; a few
 ///   degrees of misalignment are found too, but explain less than half of the
 ///   plant's residual floor, see `tests/tests/hidden_effect.rs`).
+/// - `stretch-reflex`: delay 15–35 ms in whole milliseconds (the arm's neural tick at
+///   its default divisor; short-latency reflexes of the upper limb lie at 20–50 ms
+///   from stretch to EMG, the lumped model has no separate EMG-to-force lag), gain
+///   100–250 N of activation per m/s of muscle stretch velocity: the same order as the
+///   muscles' own damping `τ_d K_m` (≈ 100–300 N s/m at the default co-contraction),
+///   which is what makes the reflex a material part of the perturbation response
+///   (the arm's `StretchReflex::TYPICAL` 50 N s/m adds only a few percent to it).
+/// - `grip-compliance`: stiffness 2–6 kN/m, damping `k · τ` with τ 2–6 ms
+///   (4–36 N s/m; a firm grasp on a handle through skin and soft tissue). Only the
+///   stiffness is a catalog parameter and so in [`Hidden::parameters`].
+/// - `handle-mass`: 0.3–1.0 kg (an unlisted adapter, a heavier handle or grip tube).
 #[must_use]
 pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
     let mut effects = PlantEffects::default();
+    let mut stretch_reflex = None;
     let mut p = BTreeMap::new();
     match effect {
         "none" => {}
@@ -96,12 +116,38 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
             p.insert("angle_deg".into(), s.rotation_deg);
             effects.sensor = Some(s);
         }
+        "stretch-reflex" => {
+            let r = StretchReflex {
+                delay_ms: rng.random_range(15.0_f64..35.0).round(),
+                gain_n_s_per_m: rng.random_range(100.0..250.0),
+            };
+            p.insert("delay_ms".into(), r.delay_ms);
+            p.insert("gain".into(), r.gain_n_s_per_m);
+            stretch_reflex = Some(r);
+        }
+        "grip-compliance" => {
+            let k = rng.random_range(2000.0..6000.0);
+            let g = GripCompliance {
+                stiffness_n_per_m: k,
+                damping_n_s_per_m: k * rng.random_range(2e-3..6e-3),
+            };
+            p.insert("stiffness_n_per_m".into(), g.stiffness_n_per_m);
+            effects.grip_compliance = Some(g);
+        }
+        "handle-mass" => {
+            let h = HandleMass {
+                extra_mass_kg: rng.random_range(0.3..1.0),
+            };
+            p.insert("extra_mass_kg".into(), h.extra_mass_kg);
+            effects.handle_mass = Some(h);
+        }
         _ => return None,
     }
     Some(Hidden {
         effect: effect.to_string(),
         parameters: p,
         effects,
+        stretch_reflex,
     })
 }
 
@@ -130,8 +176,16 @@ pub fn generate(
         .ok_or_else(|| format!("unknown effect {effect:?}; known: {EFFECTS:?}"))?;
     let mut protocol = Protocol::builtin("reach-perturb")?;
     protocol.recording.rate_hz = 1000;
+    // The shared sessions' protocol: 32 reaches of which 24 perturbed (8 angles × 3),
+    // in random order. The hand balance needs the perturbed trials, and the first 32 of
+    // the seed's 100-trial schedule hold only ~8 of them.
+    let mut reach = protocol.reach();
+    let perturbed = reach.repetitions as usize * reach.angles_deg.len();
+    reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);
+    protocol.reach = Some(reach);
     protocol.recording.truth_columns = false;
     protocol.plant.effects = hidden.effects.clone();
+    protocol.subjects.arm.stretch_reflex = hidden.stretch_reflex;
     protocol.subjects.first_is_nominal = false;
     let options = Options {
         subjects: 1,

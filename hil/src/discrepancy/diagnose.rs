@@ -1,6 +1,13 @@
-//! `diagnose`: fit every candidate plant effect to the cart force balance on training
-//! trials, judge it on held-out trials against the nominal balance, and name the cause
-//! only when the held-out gain is both beyond chance and material.
+//! `diagnose`: fit every candidate plant effect to the cart force balance and every
+//! human-side one to the hand balance ([`super::hand`]) on training trials, judge each
+//! on held-out trials against its own balance's baseline, and name the cause only when
+//! the held-out gain is both beyond chance and material.
+//!
+//! The two balances see different effects: the human-side effects act above the force
+//! sensor and cannot change the cart balance; the plant-side ones (but sensor rotation)
+//! do not enter the hand balance. A significant plant-side effect is named first (it
+//! also spoils the sensor reading the hand balance rests on), else a significant
+//! human-side one, else `none`.
 //!
 //! The chance threshold: each fold gives a held-out gain `gₖ = 1 − √(SSEₖ,ext / SSEₖ,base)`.
 //! Under "the candidate explains nothing" the folds' gains scatter around a value ≤ 0
@@ -22,29 +29,15 @@ use super::delay::ActuationDelay;
 use super::error::DiscrepancyError;
 use super::friction::RailFriction;
 use super::gram::Gram;
+use super::hand::{HandJudgement, baseline_parameters, judge_hand};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
 use super::stats::{jackknife_se, mean_sd, student_t_critical};
 use crate::session::Session;
 
-/// Catalog effects that act on the human side of the sensor and so cannot show in the
-/// cart balance, with the reason.
-pub const HUMAN_SIDE: [(&str, &str); 3] = [
-    (
-        "handle-mass",
-        "mass above the sensor: the sensor already reads the handle's inertia, so the cart balance is unchanged; \
-         it only changes the coupled arm-handle response (needs the simulation replay, `rigtwin compare`)",
-    ),
-    (
-        "grip-compliance",
-        "acts between hand and handle, above the sensor; needs the simulation replay (`rigtwin compare`)",
-    ),
-    (
-        "stretch-reflex",
-        "a property of the subject, above the sensor; needs the simulation replay (`rigtwin compare`)",
-    ),
-];
+/// Catalog effects judged from the hand balance (the response to the force pulses).
+pub const HUMAN_SIDE: [&str; 3] = ["stretch-reflex", "grip-compliance", "handle-mass"];
 
 /// Catalog effects judged from the cart force balance.
 pub const PLANT_SIDE: [&str; 4] = [
@@ -80,6 +73,8 @@ impl Default for DiagnoseOptions {
 pub struct Ranked {
     /// Catalog name.
     pub name: String,
+    /// The balance it was judged on: `cart` (plant side) or `hand` (human side).
+    pub balance: String,
     /// Held-out gain `1 − extended/baseline` NRMSE.
     pub gain: f64,
     /// Held-out NRMSE of the extended model.
@@ -88,7 +83,8 @@ pub struct Ranked {
     pub fold_gains: Vec<f64>,
     /// One-sided t statistic of the fold gains.
     pub t_statistic: f64,
-    /// Beyond chance and at least the material floor.
+    /// Beyond chance, at least the material floor, and physical (a positive mass or
+    /// reflex gain).
     pub significant: bool,
     /// Parameters fitted on all trials (units in the names).
     pub parameters: BTreeMap<String, f64>,
@@ -103,10 +99,14 @@ pub struct Threshold {
     pub alpha: f64,
     /// Candidates judged (Bonferroni divisor).
     pub candidates: usize,
-    /// Degrees of freedom (folds − 1).
+    /// Degrees of freedom of the cart balance (folds − 1).
     pub df: usize,
-    /// Critical t.
+    /// Critical t of the cart balance.
     pub t_critical: f64,
+    /// Degrees of freedom of the hand balance (folds of perturbed trials − 1).
+    pub hand_df: Option<usize>,
+    /// Critical t of the hand balance.
+    pub hand_t_critical: Option<f64>,
     /// Material floor on the gain.
     pub min_gain: f64,
     /// The rule in words.
@@ -141,7 +141,10 @@ pub struct Diagnosis {
     pub parameters: BTreeMap<String, f64>,
     /// Their jackknife standard errors over the folds.
     pub parameter_se: BTreeMap<String, f64>,
-    /// Held-out NRMSE of the nominal balance (fitted masses and latency only).
+    /// Held-out NRMSE of the baseline of the balance the cause was judged on: the
+    /// nominal cart balance (fitted masses and latency only), or for a human-side cause
+    /// the hand balance's baseline. For `none`, the cart balance's (the hand balance's
+    /// when the session has no motor command).
     pub baseline_nrmse: Option<f64>,
     /// Held-out NRMSE with the cause (equal to the baseline for `none`).
     pub extended_nrmse: Option<f64>,
@@ -149,6 +152,18 @@ pub struct Diagnosis {
     pub gain: Option<f64>,
     /// The nominal balance's own fitted parameters.
     pub baseline: BTreeMap<String, f64>,
+    /// Held-out NRMSE of the nominal cart balance (whatever the cause).
+    pub cart_baseline_nrmse: Option<f64>,
+    /// Perturbed trials whose response the hand balance used.
+    pub hand_trials_used: usize,
+    /// Units the hand balance's folds run over: pulse directions (repetitions averaged)
+    /// or single trials.
+    pub hand_units: usize,
+    /// Held-out NRMSE of the hand balance's baseline (the arm's known inertia, fitted
+    /// D, K and delayed feedback), normalised by the hand's response force.
+    pub hand_baseline_nrmse: Option<f64>,
+    /// The hand balance baseline's fitted parameters.
+    pub hand_baseline: BTreeMap<String, f64>,
     /// Every judged candidate, best held-out gain first.
     pub ranking: Vec<Ranked>,
     /// The best candidate after the cause (or the best one when the cause is `none`).
@@ -189,8 +204,10 @@ pub struct Analysis {
     pub latency_s: f64,
     /// The baseline's fit (`None` when the session lacks the command channels).
     pub baseline: Option<CvFit>,
-    /// Each judged candidate's fit, in ranking order.
+    /// Each judged plant-side candidate's fit, best held-out gain first.
     pub fits: Vec<CandidateFit>,
+    /// The hand balance (`None` when the session has no usable perturbations).
+    pub hand: Option<HandJudgement>,
 }
 
 fn grams_of(
@@ -199,6 +216,46 @@ fn grams_of(
     latency_s: f64,
 ) -> Result<Vec<Vec<Gram>>, DiscrepancyError> {
     signals.par_iter().map(|s| c.grams(s, latency_s)).collect()
+}
+
+/// Held-out gain, fold gains and t of an extended fit against its baseline.
+fn fold_stats(fit: &CvFit, base: &CvFit, base_nrmse: f64) -> (f64, f64, Vec<f64>, f64) {
+    let nrmse = fit.nrmse();
+    let gain = 1.0 - nrmse / base_nrmse;
+    let fold_gains: Vec<f64> = fit
+        .folds
+        .iter()
+        .zip(&base.folds)
+        .map(|(e, b)| 1.0 - (e.test_sse / b.test_sse).sqrt())
+        .collect();
+    let (m, sd) = mean_sd(&fold_gains);
+    let t = if sd > 0.0 {
+        m / (sd / (fold_gains.len() as f64).sqrt())
+    } else if m > 0.0 {
+        f64::INFINITY
+    } else {
+        0.0
+    };
+    (nrmse, gain, fold_gains, t)
+}
+
+/// Parameters on all trials and their jackknife spread over the folds.
+fn params_with_se(
+    all: Vec<(String, f64)>,
+    per_fold: &[Vec<(String, f64)>],
+) -> (BTreeMap<String, f64>, BTreeMap<String, f64>) {
+    let parameters: BTreeMap<String, f64> = all.into_iter().collect();
+    let se = parameters
+        .keys()
+        .map(|k| {
+            let est: Vec<f64> = per_fold
+                .iter()
+                .filter_map(|fp| fp.iter().find(|(n, _)| n == k).map(|(_, v)| *v))
+                .collect();
+            (k.clone(), jackknife_se(&est))
+        })
+        .collect();
+    (parameters, se)
 }
 
 /// Diagnoses a session: see the module docs.
@@ -216,13 +273,8 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         .into_iter()
         .flatten()
         .collect();
-    let mut not_judged: Vec<NotJudged> = HUMAN_SIDE
-        .iter()
-        .map(|(e, r)| NotJudged {
-            effect: (*e).to_string(),
-            reason: (*r).to_string(),
-        })
-        .collect();
+    let hand = judge_hand(session, opts.folds)?;
+    let mut not_judged: Vec<NotJudged> = Vec::new();
     let mut d = Diagnosis {
         session: session.dir.display().to_string(),
         trials_total: session.trials.len(),
@@ -236,6 +288,11 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         extended_nrmse: None,
         gain: None,
         baseline: BTreeMap::new(),
+        cart_baseline_nrmse: None,
+        hand_trials_used: 0,
+        hand_units: 0,
+        hand_baseline_nrmse: None,
+        hand_baseline: BTreeMap::new(),
         ranking: Vec::new(),
         runner_up: None,
         threshold: None,
@@ -243,7 +300,89 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         evidence: Vec::new(),
     };
     const MIN_TRIALS: usize = 4;
-    if signals.len() < MIN_TRIALS {
+    let plant_ok = signals.len() >= MIN_TRIALS;
+    let judged = if plant_ok { PLANT_SIDE.len() } else { 0 }
+        + if hand.is_ok() { HUMAN_SIDE.len() } else { 0 };
+    let alpha_each = opts.alpha / judged.max(1) as f64;
+
+    // ---- the cart balance (plant side) ----
+    let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
+    let mut baseline_fit = None;
+    let mut latency_s = 0.0;
+    let mut plant_df = 0;
+    let mut plant_t = f64::NAN;
+    if plant_ok {
+        let folds = Folds::interleaved(signals.len(), opts.folds);
+        d.folds = folds.k;
+        // The nominal latency, from all trials (one shared timing parameter; it is part
+        // of the baseline and of every extended model alike, so it cannot favour any).
+        let nominal = ActuationDelay::nominal();
+        let lat_grams = grams_of(&nominal, &signals, 0.0)?;
+        let lat_fit = cross_validate(&lat_grams, &folds, "nominal latency")?;
+        latency_s = nominal.lag_s(lat_fit.setting);
+        let baseline = cross_validate(
+            &grams_of(&Baseline, &signals, latency_s)?,
+            &folds,
+            "baseline",
+        )?;
+        let base_nrmse = baseline.nrmse();
+        d.baseline = Baseline
+            .parameters(0, &baseline.beta, latency_s)
+            .into_iter()
+            .collect();
+        let travel = signals
+            .iter()
+            .map(|s| s.travel_m(0).max(s.travel_m(1)))
+            .fold(0.0, f64::max);
+        let candidates: Vec<Box<dyn Candidate>> = vec![
+            Box::new(RailFriction),
+            Box::new(ForceRipple::for_travel(travel)),
+            Box::new(ActuationDelay::candidate()),
+            Box::new(SensorRotation::default()),
+        ];
+        let fits: Vec<CandidateFit> = candidates
+            .into_par_iter()
+            .map(|c| {
+                let g = grams_of(c.as_ref(), &signals, latency_s)?;
+                let fit = cross_validate(&g, &folds, c.name())?;
+                Ok(CandidateFit { candidate: c, fit })
+            })
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+        plant_df = folds.k.saturating_sub(1).max(1);
+        plant_t = student_t_critical(alpha_each, plant_df as f64);
+        plant_ranked = fits
+            .into_iter()
+            .map(|cf| {
+                let c = cf.candidate.as_ref();
+                let fit = &cf.fit;
+                let (nrmse, gain, fold_gains, t) = fold_stats(fit, &baseline, base_nrmse);
+                let fold_params: Vec<Vec<(String, f64)>> = fit
+                    .folds
+                    .iter()
+                    .map(|f| c.parameters(f.setting, &f.beta, latency_s))
+                    .collect();
+                let (parameters, parameter_se) = params_with_se(
+                    c.parameters(fit.setting, &fit.beta, latency_s),
+                    &fold_params,
+                );
+                let r = Ranked {
+                    name: c.name().to_string(),
+                    balance: "cart".into(),
+                    gain,
+                    extended_nrmse: nrmse,
+                    fold_gains,
+                    t_statistic: t,
+                    significant: t > plant_t && gain >= opts.min_gain,
+                    parameters,
+                    parameter_se,
+                };
+                (r, cf)
+            })
+            .collect();
+        plant_ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        d.baseline_nrmse = Some(base_nrmse);
+        baseline_fit = Some(baseline);
+    } else {
         let reason = format!(
             "needs the motor command columns cmd_fx_n, cmd_fy_n in at least {MIN_TRIALS} trials; {} of {} have them",
             signals.len(),
@@ -255,173 +394,185 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 reason: reason.clone(),
             });
         }
-        d.not_judged = not_judged;
+    }
+
+    // ---- the hand balance (human side) ----
+    let mut hand_ranked: Vec<Ranked> = Vec::new();
+    let mut hand_df = None;
+    let mut hand_t = None;
+    let hand = match hand {
+        Ok(h) => {
+            let base_nrmse = h.baseline.nrmse();
+            d.hand_trials_used = h.responses.iter().map(|r| r.trials.len()).sum();
+            d.hand_units = h.responses.len();
+            d.hand_baseline_nrmse = Some(base_nrmse);
+            d.hand_baseline = baseline_parameters(&h.baseline.beta, h.fb_delay_s)
+                .into_iter()
+                .collect();
+            let df = h.folds.k.saturating_sub(1).max(1);
+            let t_crit = student_t_critical(alpha_each, df as f64);
+            hand_df = Some(df);
+            hand_t = Some(t_crit);
+            for hf in &h.fits {
+                let c = hf.candidate.as_ref();
+                let fit = &hf.fit;
+                let (nrmse, gain, fold_gains, t) = fold_stats(fit, &h.baseline, base_nrmse);
+                let fold_params: Vec<Vec<(String, f64)>> = fit
+                    .folds
+                    .iter()
+                    .map(|f| c.parameters(f.setting, &f.beta, h.fb_delay_s))
+                    .collect();
+                let (parameters, parameter_se) = params_with_se(
+                    c.parameters(fit.setting, &fit.beta, h.fb_delay_s),
+                    &fold_params,
+                );
+                hand_ranked.push(Ranked {
+                    name: c.name().to_string(),
+                    balance: "hand".into(),
+                    gain,
+                    extended_nrmse: nrmse,
+                    fold_gains,
+                    t_statistic: t,
+                    significant: t > t_crit
+                        && gain >= opts.min_gain
+                        && c.physical(fit.setting, &fit.beta),
+                    parameters,
+                    parameter_se,
+                });
+            }
+            hand_ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+            Some(h)
+        }
+        Err(why) => {
+            for e in HUMAN_SIDE {
+                not_judged.push(NotJudged {
+                    effect: e.to_string(),
+                    reason: why.clone(),
+                });
+            }
+            None
+        }
+    };
+
+    // ---- the decision ----
+    let cart_nrmse = d.baseline_nrmse;
+    d.cart_baseline_nrmse = cart_nrmse;
+    if d.baseline_nrmse.is_none() {
+        d.baseline_nrmse = d.hand_baseline_nrmse;
+    }
+    d.extended_nrmse = d.baseline_nrmse;
+    d.gain = d.baseline_nrmse.map(|_| 0.0);
+    let cause = plant_ranked
+        .iter()
+        .map(|(r, _)| r)
+        .find(|r| r.significant)
+        .or_else(|| hand_ranked.iter().find(|r| r.significant))
+        .cloned();
+    if let Some(r) = &cause {
+        d.cause = r.name.clone();
+        d.parameters = r.parameters.clone();
+        d.parameter_se = r.parameter_se.clone();
+        if r.balance == "hand" {
+            d.baseline_nrmse = d.hand_baseline_nrmse;
+        }
+        d.extended_nrmse = Some(r.extended_nrmse);
+        d.gain = Some(r.gain);
+    }
+    let mut ranking: Vec<Ranked> = plant_ranked
+        .iter()
+        .map(|(r, _)| r.clone())
+        .chain(hand_ranked.iter().cloned())
+        .collect();
+    ranking.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    d.runner_up = ranking
+        .iter()
+        .find(|r| Some(&r.name) != cause.as_ref().map(|c| &c.name))
+        .map(|r| r.name.clone());
+    if judged > 0 {
+        d.threshold = Some(Threshold {
+            alpha: opts.alpha,
+            candidates: judged,
+            df: plant_df,
+            t_critical: plant_t,
+            hand_df,
+            hand_t_critical: hand_t,
+            min_gain: opts.min_gain,
+            rule: format!(
+                "a candidate is named when the one-sided t of its fold gains (against its own balance's baseline) \
+                 exceeds the critical t at alpha {} / {judged} candidates = {:.4} (cart balance: df {plant_df}, t {plant_t:.2}{}) \
+                 and its held-out gain is at least {:.0} %; a human-side fit must also be physical (positive mass, \
+                 positive reflex gain). The largest plant-side gain wins, else the largest human-side one",
+                opts.alpha,
+                alpha_each,
+                match (hand_df, hand_t) {
+                    (Some(df), Some(t)) => format!("; hand balance: df {df}, t {t:.2}"),
+                    _ => String::new(),
+                },
+                opts.min_gain * 100.0
+            ),
+        });
+    }
+    d.evidence = evidence(&d, &ranking, cart_nrmse, hand.as_ref());
+    if !plant_ok {
         d.evidence.push(
             "no plant-side judgement possible: the cart force balance needs the motor command"
                 .into(),
         );
-        return Ok(Analysis {
-            diagnosis: d,
-            signals,
-            latency_s: 0.0,
-            baseline: None,
-            fits: Vec::new(),
-        });
     }
-    let folds = Folds::interleaved(signals.len(), opts.folds);
-    d.folds = folds.k;
-
-    // The nominal latency, from all trials (one shared timing parameter; it is part of
-    // the baseline and of every extended model alike, so it cannot favour any).
-    let nominal = ActuationDelay::nominal();
-    let lat_grams = grams_of(&nominal, &signals, 0.0)?;
-    let lat_fit = cross_validate(&lat_grams, &folds, "nominal latency")?;
-    let latency_s = nominal.lag_s(lat_fit.setting);
-
-    let baseline = cross_validate(
-        &grams_of(&Baseline, &signals, latency_s)?,
-        &folds,
-        "baseline",
-    )?;
-    let base_nrmse = baseline.nrmse();
-    d.baseline = Baseline
-        .parameters(0, &baseline.beta, latency_s)
-        .into_iter()
-        .collect();
-
-    let travel = signals
-        .iter()
-        .map(|s| s.travel_m(0).max(s.travel_m(1)))
-        .fold(0.0, f64::max);
-    let candidates: Vec<Box<dyn Candidate>> = vec![
-        Box::new(RailFriction),
-        Box::new(ForceRipple::for_travel(travel)),
-        Box::new(ActuationDelay::candidate()),
-        Box::new(SensorRotation::default()),
-    ];
-    let fits: Vec<CandidateFit> = candidates
-        .into_par_iter()
-        .map(|c| {
-            let g = grams_of(c.as_ref(), &signals, latency_s)?;
-            let fit = cross_validate(&g, &folds, c.name())?;
-            Ok(CandidateFit { candidate: c, fit })
-        })
-        .collect::<Result<Vec<_>, DiscrepancyError>>()?;
-
-    let df = folds.k.saturating_sub(1).max(1);
-    let t_crit = student_t_critical(opts.alpha / fits.len() as f64, df as f64);
-    let mut ranked: Vec<(Ranked, CandidateFit)> = fits
-        .into_iter()
-        .map(|cf| {
-            let c = cf.candidate.as_ref();
-            let fit = &cf.fit;
-            let nrmse = fit.nrmse();
-            let gain = 1.0 - nrmse / base_nrmse;
-            let fold_gains: Vec<f64> = fit
-                .folds
-                .iter()
-                .zip(&baseline.folds)
-                .map(|(e, b)| 1.0 - (e.test_sse / b.test_sse).sqrt())
-                .collect();
-            let (m, sd) = mean_sd(&fold_gains);
-            let t = if sd > 0.0 {
-                m / (sd / (fold_gains.len() as f64).sqrt())
-            } else if m > 0.0 {
-                f64::INFINITY
-            } else {
-                0.0
-            };
-            let parameters: BTreeMap<String, f64> = c
-                .parameters(fit.setting, &fit.beta, latency_s)
-                .into_iter()
-                .collect();
-            let fold_params: Vec<Vec<(String, f64)>> = fit
-                .folds
-                .iter()
-                .map(|f| c.parameters(f.setting, &f.beta, latency_s))
-                .collect();
-            let parameter_se = parameters
-                .keys()
-                .map(|k| {
-                    let est: Vec<f64> = fold_params
-                        .iter()
-                        .filter_map(|fp| fp.iter().find(|(n, _)| n == k).map(|(_, v)| *v))
-                        .collect();
-                    (k.clone(), jackknife_se(&est))
-                })
-                .collect();
-            let r = Ranked {
-                name: c.name().to_string(),
-                gain,
-                extended_nrmse: nrmse,
-                fold_gains,
-                t_statistic: t,
-                significant: t > t_crit && gain >= opts.min_gain,
-                parameters,
-                parameter_se,
-            };
-            (r, cf)
-        })
-        .collect();
-    ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
-
-    d.baseline_nrmse = Some(base_nrmse);
-    d.extended_nrmse = Some(base_nrmse);
-    d.gain = Some(0.0);
-    let cause_index = ranked.iter().position(|(r, _)| r.significant);
-    if let Some(i) = cause_index {
-        let r = &ranked[i].0;
-        d.cause = r.name.clone();
-        d.parameters = r.parameters.clone();
-        d.parameter_se = r.parameter_se.clone();
-        d.extended_nrmse = Some(r.extended_nrmse);
-        d.gain = Some(r.gain);
-    }
-    d.runner_up = ranked
-        .iter()
-        .enumerate()
-        .find(|(i, _)| Some(*i) != cause_index)
-        .map(|(_, (r, _))| r.name.clone());
-    d.threshold = Some(Threshold {
-        alpha: opts.alpha,
-        candidates: ranked.len(),
-        df,
-        t_critical: t_crit,
-        min_gain: opts.min_gain,
-        rule: format!(
-            "a candidate is named when the one-sided t of its {} fold gains exceeds t({:.4}, df {df}) = {t_crit:.2} \
-             (alpha {} / {} candidates) and its held-out gain is at least {:.0} %; the largest such gain wins",
-            folds.k,
-            opts.alpha / ranked.len() as f64,
-            opts.alpha,
-            ranked.len(),
-            opts.min_gain * 100.0
-        ),
-    });
-    d.evidence = evidence(&d, &ranked, base_nrmse);
     d.not_judged = not_judged;
-    let (ranking, fits): (Vec<Ranked>, Vec<CandidateFit>) = ranked.into_iter().unzip();
     d.ranking = ranking;
+    let fits = plant_ranked.into_iter().map(|(_, f)| f).collect();
     Ok(Analysis {
         diagnosis: d,
         signals,
         latency_s,
-        baseline: Some(baseline),
+        baseline: baseline_fit,
         fits,
+        hand,
     })
 }
 
-fn evidence(d: &Diagnosis, ranked: &[(Ranked, CandidateFit)], base_nrmse: f64) -> Vec<String> {
+fn evidence(
+    d: &Diagnosis,
+    ranked: &[Ranked],
+    cart_nrmse: Option<f64>,
+    hand: Option<&HandJudgement>,
+) -> Vec<String> {
     let mut ev = Vec::new();
     let g = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
-    ev.push(format!(
-        "nominal balance: moving mass x {:.3} kg (both carts), y {:.3} kg (upper cart), latency {:.3} ms; held-out NRMSE {:.4}",
-        g("moving_mass_x_kg"),
-        g("moving_mass_y_kg"),
-        g("latency_ms"),
-        base_nrmse
-    ));
-    for (r, _) in ranked {
+    if let Some(cart) = cart_nrmse {
+        ev.push(format!(
+            "nominal cart balance: moving mass x {:.3} kg (both carts), y {:.3} kg (upper cart), latency {:.3} ms; held-out NRMSE {:.4}",
+            g("moving_mass_x_kg"),
+            g("moving_mass_y_kg"),
+            g("latency_ms"),
+            cart
+        ));
+    }
+    if let (Some(h), Some(nrmse)) = (hand, d.hand_baseline_nrmse) {
+        let p = |k: &str| d.hand_baseline.get(k).copied().unwrap_or(f64::NAN);
+        ev.push(format!(
+            "hand balance baseline ({} perturbed trials as {} averaged responses, {} s windows, the arm's inertia from segment lengths): \
+             D = [{:.1} {:.1}; {:.1} {:.1}] N s/m, K = [{:.0} {:.0}; {:.0} {:.0}] N/m, delayed feedback {:.0} ms with \
+             gains {:.0} N/m, {:.1} N s/m; held-out NRMSE {:.4}",
+            d.hand_trials_used,
+            h.responses.len(),
+            super::hand_signals::HAND_WINDOW_S,
+            p("d11_n_s_per_m"),
+            p("d12_n_s_per_m"),
+            p("d12_n_s_per_m"),
+            p("d22_n_s_per_m"),
+            p("k11_n_per_m"),
+            p("k12_n_per_m"),
+            p("k12_n_per_m"),
+            p("k22_n_per_m"),
+            p("feedback_delay_ms"),
+            p("feedback_position_gain_n_per_m"),
+            p("feedback_velocity_gain_n_s_per_m"),
+            nrmse
+        ));
+    }
+    for r in ranked {
         let min = r.fold_gains.iter().copied().fold(f64::INFINITY, f64::min);
         let max = r
             .fold_gains
@@ -439,8 +590,9 @@ fn evidence(d: &Diagnosis, ranked: &[(Ranked, CandidateFit)], base_nrmse: f64) -
             })
             .collect();
         ev.push(format!(
-            "{}: held-out gain {:.1} % (folds {:.1} … {:.1} %), t = {:.1}{}; {}",
+            "{} ({} balance): held-out gain {:.1} % (folds {:.1} … {:.1} %), t = {:.1}{}; {}",
             r.name,
+            r.balance,
             100.0 * r.gain,
             100.0 * min,
             100.0 * max,

@@ -6,6 +6,8 @@
 //! | `signals.rs` | one smoothing for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
+//! | `hand_signals.rs` | the variational response to each force pulse, against aligned unperturbed trials |
+//! | `hand.rs` | the hand balance and the human-side catalog effects ([`HandCandidate`]) |
 //! | `gram.rs` | least squares as sums of per-trial sufficient statistics |
 //! | `crossval.rs` | folds of whole trials; held-out error |
 //! | `stats.rs` | Student's t and the jackknife behind the chance threshold |
@@ -25,6 +27,8 @@ mod diagnose;
 mod error;
 mod friction;
 mod gram;
+mod hand;
+mod hand_signals;
 mod model;
 pub mod plots;
 mod replay;
@@ -46,6 +50,14 @@ pub use diagnose::{
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
 pub use gram::Gram;
+pub use hand::{
+    FEEDBACK_DELAYS_MS, FIT_ARM_MASS_SCALE, GRIP_STIFFNESS_N_PER_M, GRIP_TIME_S, GripCompliance,
+    HandBaseline, HandCandidate, HandFit, HandJudgement, HandleMass, Kin, REFLEX_DELAY_MS,
+    StretchReflex, hand_fit_rows, hand_grams, judge_hand,
+};
+pub use hand_signals::{
+    HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, hand_responses,
+};
 pub use model::ExtendedModel;
 pub use replay::{
     CHANNELS, ChannelError, CompareOptions, Comparison, ImpedanceComparison, RESPONSE_WINDOW_S,

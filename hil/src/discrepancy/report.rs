@@ -9,6 +9,7 @@ use super::candidate::{Baseline, Candidate as _};
 use super::crossval::Folds;
 use super::diagnose::{Analysis, CandidateFit, Diagnosis};
 use super::error::DiscrepancyError;
+use super::hand::{GRIP_TIME_S, HandBaseline, HandFit, HandJudgement, hand_fit_rows};
 use super::plots::{Drawn, Figure, Series, Style};
 
 fn fmt_params(
@@ -47,20 +48,36 @@ pub fn table(d: &Diagnosis) -> String {
         "session {}  ({} of {} trials with motor command, {} Hz, {} folds)",
         d.session, d.trials_used, d.trials_total, d.rate_hz, d.folds
     );
-    if let Some(b) = d.baseline_nrmse {
+    if let Some(b) = d.cart_baseline_nrmse {
         let g = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
         let _ = writeln!(
             out,
-            "nominal balance  moving mass x {:.3} kg, y {:.3} kg, latency {:.3} ms, held-out NRMSE {:.4}\n",
+            "cart balance  moving mass x {:.3} kg, y {:.3} kg, latency {:.3} ms, held-out NRMSE {:.4}",
             g("moving_mass_x_kg"),
             g("moving_mass_y_kg"),
             g("latency_ms"),
             b
         );
+    }
+    if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
-            "{:<4} {:<16} {:>8} {:>9} {:>8}  {:<8} parameters",
-            "rank", "candidate", "gain %", "NRMSE", "t", "verdict"
+            "hand balance  {} perturbed trials as {} responses, arm inertia from segment lengths, feedback delay {:.0} ms, held-out NRMSE {:.4}",
+            d.hand_trials_used,
+            d.hand_units,
+            d.hand_baseline
+                .get("feedback_delay_ms")
+                .copied()
+                .unwrap_or(f64::NAN),
+            b
+        );
+    }
+    if !d.ranking.is_empty() {
+        let _ = writeln!(out);
+        let _ = writeln!(
+            out,
+            "{:<4} {:<16} {:<7} {:>8} {:>9} {:>8}  {:<8} parameters",
+            "rank", "candidate", "balance", "gain %", "NRMSE", "t", "verdict"
         );
         for (i, r) in d.ranking.iter().enumerate() {
             let verdict = if r.name == d.cause {
@@ -72,9 +89,10 @@ pub fn table(d: &Diagnosis) -> String {
             };
             let _ = writeln!(
                 out,
-                "{:<4} {:<16} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
+                "{:<4} {:<16} {:<7} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
                 i + 1,
                 r.name,
+                r.balance,
                 100.0 * r.gain,
                 r.extended_nrmse,
                 r.t_statistic,
@@ -309,6 +327,144 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
     }))
 }
 
+/// The figure of a human-side candidate: for `handle-mass` the hand balance's baseline
+/// residual against the handle's acceleration (its slope is the unlisted mass), for the
+/// others the search of the nonlinear parameter (reflex delay; grip stiffness at the
+/// chosen damping time).
+fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
+    let c = hf.candidate.as_ref();
+    let fit = &hf.fit;
+    if c.name() == "handle-mass" {
+        let mut cloud = Vec::new();
+        for r in &h.responses {
+            let rows = hand_fit_rows(&HandBaseline, r, 0, &h.baseline.beta, h.fb_delay_s);
+            for (k, (y, f, _)) in rows.iter().enumerate() {
+                let (j, axis) = (r.rows[k / 2], k % 2);
+                cloud.push((r.da[axis][j], y - f));
+            }
+        }
+        let m = fit.beta.last().copied().unwrap_or(0.0);
+        let (lo, hi) = cloud
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), p| {
+                (l.min(p.0), u.max(p.0))
+            });
+        return Figure {
+            title: format!(
+                "handle-mass: hand balance residual against acceleration (slope {m:.3} kg)"
+            ),
+            x_desc: "handle acceleration Δa (m/s²)".into(),
+            y_desc: "−ΔF − M_arm Δa − baseline fit (N)".into(),
+            series: vec![
+                Series {
+                    label: "samples (both axes)".into(),
+                    points: cloud,
+                    style: Style::Dots,
+                    rgb: (120, 120, 120),
+                },
+                Series {
+                    label: format!("extra mass {m:.3} kg"),
+                    points: vec![(lo, m * lo), (hi, m * hi)],
+                    style: Style::Bold,
+                    rgb: (210, 50, 40),
+                },
+            ],
+            bars: Vec::new(),
+            hline: None,
+        };
+    }
+    let norm: f64 = fit.folds.iter().map(|f| f.test_norm_sq).sum();
+    let stride = if c.name() == "grip-compliance" {
+        GRIP_TIME_S.len()
+    } else {
+        1
+    };
+    let curve: Vec<(f64, f64)> = fit
+        .curve
+        .iter()
+        .enumerate()
+        .filter(|(s, _)| s % stride == fit.setting % stride)
+        .map(|(s, sse)| (c.setting(s).1, (sse / norm).sqrt()))
+        .collect();
+    let (name, value) = c.setting(fit.setting);
+    let (y0, y1) = curve
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+            (l.min(p.1), h.max(p.1))
+        });
+    Figure {
+        title: format!("{}: hand balance error against {name}", c.name()),
+        x_desc: name.replace('_', " "),
+        y_desc: "NRMSE of the hand balance, all perturbed trials".into(),
+        series: vec![
+            Series {
+                label: "search".into(),
+                points: curve,
+                style: Style::Line,
+                rgb: (30, 90, 200),
+            },
+            Series {
+                label: format!("fit {name} = {}", sig(value)),
+                points: vec![(value, y0), (value, y1)],
+                style: Style::Bold,
+                rgb: (210, 50, 40),
+            },
+        ],
+        bars: Vec::new(),
+        hline: None,
+    }
+}
+
+/// A held-out perturbed response of fold 0, y axis: the hand's response force,
+/// measured vs baseline vs extended (each fitted without it).
+fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
+    let ti = (0..h.responses.len()).find(|i| h.folds.of_trial.get(*i) == Some(&0))?;
+    let r = &h.responses[ti];
+    let (bf, ef) = (h.baseline.folds.first()?, hf.fit.folds.first()?);
+    let base = hand_fit_rows(&HandBaseline, r, 0, &bf.beta, h.fb_delay_s);
+    let ext = hand_fit_rows(hf.candidate.as_ref(), r, ef.setting, &ef.beta, h.fb_delay_s);
+    let t = |k: usize| (r.rows[k / 2] as f64 - r.onset as f64) / r.rate_hz;
+    // Each model's prediction of −ΔF_hand: its fit plus its own known inertia term
+    // (`−ΔF − y`, which differs between models when the grip moves the hand).
+    let pick = |rows: &[(f64, f64, f64)], measured: bool| -> Vec<(f64, f64)> {
+        rows.iter()
+            .enumerate()
+            .filter(|(k, _)| k % 2 == 1)
+            .map(|(k, (y, f, n))| (t(k), if measured { -n } else { f - n - y }))
+            .collect()
+    };
+    Some(Figure {
+        title: format!(
+            "held-out response to the pulse at {:.0}° (trials {:?}), y axis: hand force",
+            r.angle_deg, r.trials
+        ),
+        x_desc: "time since the pulse onset (s)".into(),
+        y_desc: "−ΔF_hand (N)".into(),
+        series: vec![
+            Series {
+                label: "measured".into(),
+                points: pick(&base, true),
+                style: Style::Bold,
+                rgb: (40, 40, 40),
+            },
+            Series {
+                label: "hand baseline".into(),
+                points: pick(&base, false),
+                style: Style::Line,
+                rgb: (30, 90, 200),
+            },
+            Series {
+                label: format!("extended ({})", hf.candidate.name()),
+                points: pick(&ext, false),
+                style: Style::Line,
+                rgb: (210, 50, 40),
+            },
+        ],
+        bars: Vec::new(),
+        hline: None,
+    })
+}
+
 fn ranking_figure(d: &Diagnosis) -> Figure {
     Figure {
         title: "held-out gain of each candidate (line: material floor)".into(),
@@ -338,12 +494,31 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
     let d = &a.diagnosis;
     let mut written = Vec::new();
     let mut figs: Vec<(String, &str, Figure)> = Vec::new();
+    let hand_cause = a.hand.as_ref().and_then(|h| {
+        h.fits
+            .iter()
+            .find(|f| f.candidate.name() == d.cause)
+            .map(|f| (h, f))
+    });
     let shown = a
         .fits
         .iter()
         .find(|f| f.candidate.name() == d.cause)
         .or(a.fits.first());
-    if let Some(cf) = shown {
+    if let Some((h, hf)) = hand_cause {
+        figs.push((
+            "cause.png".into(),
+            "What the cause looks like",
+            hand_cause_figure(h, hf),
+        ));
+        if let Some(f) = hand_heldout_figure(h, hf) {
+            figs.push((
+                "heldout.png".into(),
+                "A held-out perturbed trial: measured vs hand baseline vs extended",
+                f,
+            ));
+        }
+    } else if let Some(cf) = shown {
         if let Some(f) = cause_figure(a, cf)? {
             figs.push(("cause.png".into(), "What the cause looks like", f));
         }
@@ -366,7 +541,12 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
         d.cause,
         match (d.baseline_nrmse, d.extended_nrmse, d.gain) {
             (Some(b), Some(e), Some(g)) => format!(
-                " — held-out NRMSE of the cart force balance {b:.4} (baseline) → {e:.4} (extended), gain {:.1} %",
+                " — held-out NRMSE of the {} balance {b:.4} (baseline) → {e:.4} (extended), gain {:.1} %",
+                if hand_cause.is_some() {
+                    "hand"
+                } else {
+                    "cart force"
+                },
                 100.0 * g
             ),
             _ => String::new(),
@@ -394,8 +574,13 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
         "## Method\n\nThe carts obey `m·a = u(t − τ) + F + effects` per axis (x: both carts, y: upper cart; the \
          sensor is under the handle, so its reading already carries the handle's inertia). Masses and a nominal \
          latency (≤ 0.5 ms, two control ticks) are fitted; each candidate adds its terms; all fits are made on training trials and \
-         judged on held-out trials ({} folds of whole trials).",
-        d.folds
+         judged on held-out trials ({} folds of whole trials).\n\nThe human-side effects are judged on the hand \
+         balance: the response to each force pulse against the mean of the unperturbed trials aligned at the same \
+         y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
+         `M_arm` and feedback shape `S` known from the segment lengths, over {} s after the onset, in folds of \
+         perturbed trials.",
+        d.folds,
+        super::hand_signals::HAND_WINDOW_S
     );
     let md_path = dir.join("diagnosis.md");
     std::fs::write(&md_path, md).map_err(|e| werr(&md_path, e))?;
