@@ -3,7 +3,7 @@
 //!
 //! | file | idea |
 //! |---|---|
-//! | `signals.rs` | one smoothing for every term of the cart balance ([`BalanceSignals`]) |
+//! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
 //! | `hand_signals.rs` | the variational response to each force pulse, against aligned unperturbed trials |

@@ -573,7 +573,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
         md,
         "## Method\n\nThe carts obey `m·a = u(t − τ) + F + effects` per axis (x: both carts, y: upper cart; the \
          sensor is under the handle, so its reading already carries the handle's inertia). Masses and a nominal \
-         latency (≤ 0.5 ms, two control ticks) are fitted; each candidate adds its terms; all fits are made on training trials and \
+         latency (≤ 0.25 ms, one control tick) are fitted; each candidate adds its terms; all fits are made on training trials and \
          judged on held-out trials ({} folds of whole trials).\n\nThe human-side effects are judged on the hand \
          balance: the response to each force pulse against the mean of the unperturbed trials aligned at the same \
          y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
