@@ -23,6 +23,9 @@ use super::{VizError, blueprint, paths};
 /// Highest sample rate sent to a live viewer by default, Hz; files get every sample.
 pub const DEFAULT_LIVE_RATE_HZ: f64 = 500.0;
 
+/// Colour of an ellipse drawn by [`Viewer::log_ellipse`].
+const ELLIPSE_RGB: [u8; 3] = [170, 60, 170];
+
 /// Points on an ellipse outline.
 const ELLIPSE_SEGMENTS: usize = 128;
 
@@ -500,6 +503,23 @@ impl Viewer {
         scale: f64,
         label: &str,
     ) -> Result<EllipseAxes, VizError> {
+        self.log_ellipse_rgb(name, at, center, m, scale, label, ELLIPSE_RGB)
+    }
+
+    /// [`Self::log_ellipse`] in the colour `rgb` (e.g. an estimate and the ground truth side
+    /// by side).
+    #[allow(clippy::too_many_arguments)]
+    pub fn log_ellipse_rgb(
+        &mut self,
+        name: &str,
+        at: Option<Stamp>,
+        center: [f64; 2],
+        m: [[f64; 2]; 2],
+        scale: f64,
+        label: &str,
+        rgb: [u8; 3],
+    ) -> Result<EllipseAxes, VizError> {
+        let color = Color::from_rgb(rgb[0], rgb[1], rgb[2]);
         let scale = positive("ellipse scale", scale)?;
         if name.trim().is_empty() {
             return Err(VizError::InvalidId {
@@ -518,7 +538,7 @@ impl Viewer {
         );
         let outline_arch = LineStrips2D::new([outline])
             .with_labels([text])
-            .with_colors([Color::from_rgb(170, 60, 170)]);
+            .with_colors([color]);
         let vectors: Vec<[f32; 2]> = (0..2)
             .map(|k| {
                 let l = scale * axes.lengths[k];
@@ -531,7 +551,7 @@ impl Viewer {
                 format!("{:.1}", axes.lengths[0]),
                 format!("{:.1}", axes.lengths[1]),
             ])
-            .with_colors([Color::from_rgb(170, 60, 170)]);
+            .with_colors([color]);
         let (outline_path, axes_path) = (paths::ellipse_outline(name), paths::ellipse_axes(name));
         match at {
             Some(stamp) => {
@@ -544,6 +564,27 @@ impl Viewer {
             }
         }
         Ok(axes)
+    }
+
+    /// The four entries of a 2x2 matrix `m` (row-major) as one row of four scalars at `at`,
+    /// one plotted line per entry named by `names` (`K11`, `K12`, `K21`, `K22`). The values
+    /// are stored as `f64`, exactly as given (the outline and arrows of an ellipse are `f32`).
+    pub fn log_matrix(
+        &mut self,
+        path: &'static str,
+        at: Stamp,
+        names: [&str; 4],
+        m: [[f64; 2]; 2],
+    ) -> Result<(), VizError> {
+        if !self.styled.contains(path) {
+            self.styled.insert(path);
+            self.send_static(path, &SeriesLines::new().with_names(names))?;
+        }
+        self.send_row(
+            path,
+            at,
+            &Scalars::new([m[0][0], m[0][1], m[1][0], m[1][1]]),
+        )
     }
 
     /// A text entry in the event log (safety events, protocol steps).
