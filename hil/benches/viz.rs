@@ -74,7 +74,10 @@ fn median_s(protocol: &Protocol, rrd: bool, runs: usize) -> f64 {
 }
 
 fn bench_rehearse(c: &mut Criterion) {
-    let protocol = Protocol::builtin("reach-perturb").expect("the shipped protocol");
+    let protocol = match Protocol::builtin("reach-perturb") {
+        Ok(p) => p,
+        Err(err) => panic!("the shipped reach-perturb protocol: {err}"),
+    };
     assert_eq!(
         rehearse_once(&protocol, true),
         TRIALS,
