@@ -165,18 +165,23 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
     // Every sample of the written session, on every per-sample entity.
     let samples = csv_rows(&session_dir);
     assert!(samples > REACH_TRIALS * 3000, "{samples}");
-    for entity in [
-        paths::HANDLE,
-        paths::ARM_LINKS,
-        "plots/position/x",
-        "plots/force/sensor_y",
-        "plots/force/pert_x",
-        "plots/velocity/y",
-        "plots/reference/x",
-        "plots/command/y",
-        paths::ARM_ELBOW_DEG,
-    ] {
+    for entity in [paths::HANDLE, paths::ARM_LINKS] {
         assert_eq!(temporal_rows(&chunks, entity), samples, "{entity}");
+    }
+    // Each pair of series is one entity with two scalars per row: both lines hold every
+    // sample.
+    for entity in [
+        paths::POSITION,
+        paths::FORCE_SENSOR,
+        paths::FORCE_PERT,
+        paths::VELOCITY,
+        paths::REFERENCE,
+        paths::COMMAND,
+        paths::ARM_ANGLES_DEG,
+    ] {
+        let rows = scalar_rows(&chunks, entity);
+        assert_eq!(rows.len(), samples, "{entity}");
+        assert!(rows.iter().all(|r| r.len() == 2), "{entity}: two lines");
     }
 
     // The report's estimate and the arm's truth, as the report wrote them.
@@ -320,7 +325,7 @@ fn estimate_and_inspect_take_rerun_too() {
         assert!(stdout.contains("open it with: rerun"), "{stdout}");
         let chunks = recording_chunks(&std::fs::read(&rrd).unwrap());
         assert_eq!(
-            temporal_rows(&chunks, "plots/position/x"),
+            temporal_rows(&chunks, paths::POSITION),
             csv_rows(Path::new(session)),
             "{command}"
         );

@@ -98,18 +98,11 @@ fn level_name(level: EventLevel) -> &'static str {
     }
 }
 
-fn series_color(path: &str) -> Color {
-    let rgb = if path.ends_with("/x") || path.ends_with("_x") || path.ends_with("x_mm") {
-        [230, 85, 60]
-    } else if path.ends_with("shoulder_deg") {
-        [120, 90, 200]
-    } else if path.ends_with("elbow_deg") {
-        [60, 170, 120]
-    } else {
-        [50, 120, 220]
-    };
-    Color::from_rgb(rgb[0], rgb[1], rgb[2])
-}
+/// Colours of the x and y lines of a series.
+const XY_RGB: [[u8; 3]; 2] = [[230, 85, 60], [50, 120, 220]];
+
+/// Colours of the shoulder and elbow angles.
+const ARM_ANGLES_RGB: [[u8; 3]; 2] = [[120, 90, 200], [60, 170, 120]];
 
 fn positive(what: &'static str, value: f64) -> Result<f64, VizError> {
     if value.is_finite() && value > 0.0 {
@@ -308,10 +301,27 @@ impl Viewer {
                 .columns_of_unit_batches(),
         )?;
 
-        for (name, values) in columns.named() {
-            if let Some(path) = paths::series(name) {
-                self.send_series(path, name, &times, picks.iter().map(|&i| values[i]))?;
+        let pairs = [
+            (paths::POSITION, Some(x), Some(y)),
+            (paths::FORCE_SENSOR, Some(columns.fx_n), Some(columns.fy_n)),
+            (
+                paths::FORCE_PERT,
+                Some(columns.pert_fx_n),
+                Some(columns.pert_fy_n),
+            ),
+            (paths::VELOCITY, columns.vx_m_per_s, columns.vy_m_per_s),
+            (paths::REFERENCE, columns.ref_x_m, columns.ref_y_m),
+            (paths::COMMAND, columns.cmd_fx_n, columns.cmd_fy_n),
+        ];
+        for (path, a, b) in pairs {
+            if a.is_none() && b.is_none() {
+                continue;
             }
+            // A lone x or y column keeps its place in the row; the other line is NaN (no
+            // points drawn), so the entity always has the same two named lines.
+            let at = |c: Option<&[f64]>, i: usize| c.map_or(f64::NAN, |c| c[i]);
+            let values = picks.iter().flat_map(|&i| [at(a, i), at(b, i)]);
+            self.send_series(path, paths::XY, XY_RGB, &times, values)?;
         }
 
         self.log_trial_overlay(meta, columns, &span)?;
@@ -387,13 +397,15 @@ impl Viewer {
                 let times = Times::of(&stamps);
                 self.send_series(
                     paths::RESPONSE_X,
-                    "x",
+                    ["x"],
+                    [XY_RGB[0]],
                     &times,
                     r.dx_m.iter().map(|d| d * 1e3),
                 )?;
                 self.send_series(
                     paths::RESPONSE_Y,
-                    "y",
+                    ["y"],
+                    [XY_RGB[1]],
                     &times,
                     r.dy_m.iter().map(|d| d * 1e3),
                 )?;
@@ -481,10 +493,19 @@ impl Viewer {
                 .with_positions(elbow)
                 .columns_of_unit_batches(),
         )?;
-        let shoulder_deg = picks.iter().map(|&i| arm.shoulder_rad[i].to_degrees());
-        self.send_series(paths::ARM_SHOULDER_DEG, "shoulder", &times, shoulder_deg)?;
-        let elbow_deg = picks.iter().map(|&i| arm.elbow_rad[i].to_degrees());
-        self.send_series(paths::ARM_ELBOW_DEG, "elbow", &times, elbow_deg)
+        let angles_deg = picks.iter().flat_map(|&i| {
+            [
+                arm.shoulder_rad[i].to_degrees(),
+                arm.elbow_rad[i].to_degrees(),
+            ]
+        });
+        self.send_series(
+            paths::ARM_ANGLES_DEG,
+            paths::ARM_ANGLE_NAMES,
+            ARM_ANGLES_RGB,
+            &times,
+            angles_deg,
+        )
     }
 
     /// Draws a 2x2 matrix `m` (row-major; a stiffness `K` in N/m, a damping `D` in N s/m) as
@@ -616,10 +637,14 @@ impl Viewer {
         }
     }
 
-    fn send_series(
+    /// Sends `W` scalars per row (`values` row after row, one row per entry of `times`),
+    /// one plotted line per scalar named by `names`; the names and colours go out once, as
+    /// static rows.
+    fn send_series<const W: usize>(
         &mut self,
         path: &'static str,
-        name: &str,
+        names: [&str; W],
+        rgb: [[u8; 3]; W],
         times: &Times,
         values: impl Iterator<Item = f64>,
     ) -> Result<(), VizError> {
@@ -628,14 +653,15 @@ impl Viewer {
             self.send_static(
                 path,
                 &SeriesLines::new()
-                    .with_names([name])
-                    .with_colors([series_color(path)]),
+                    .with_names(names)
+                    .with_colors(rgb.map(|[r, g, b]| Color::from_rgb(r, g, b))),
             )?;
         }
+        let rows = times.tick.len();
         self.send_columns(
             path,
             Some(times),
-            Scalars::new(values).columns_of_unit_batches(),
+            Scalars::new(values).columns(std::iter::repeat_n(W, rows)),
         )
     }
 
