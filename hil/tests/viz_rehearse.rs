@@ -165,7 +165,7 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
     // Every sample of the written session, on every per-sample entity.
     let samples = csv_rows(&session_dir);
     assert!(samples > REACH_TRIALS * 3000, "{samples}");
-    for entity in [paths::HANDLE, paths::ARM_LINKS] {
+    for entity in [paths::CARRIAGE, paths::ARM_LINKS] {
         assert_eq!(temporal_rows(&chunks, entity), samples, "{entity}");
     }
     // Each pair of series is one entity with two scalars per row: both lines hold every

@@ -215,14 +215,7 @@ fn synthetic_rrd() -> Vec<u8> {
 fn every_sample_lands_on_its_entity() {
     let chunks = decode(&synthetic_rrd());
     let rows = rows_per_entity(&chunks);
-    let per_sample = [
-        paths::HANDLE,
-        paths::CART_LOWER,
-        paths::CART_UPPER,
-        paths::RAIL_Y,
-        paths::ARM_LINKS,
-        paths::ELBOW,
-    ];
+    let per_sample = [paths::CARRIAGE, paths::ARM_LINKS];
     for entity in per_sample {
         // Style or size rows are static (one row); the samples are the rest.
         let temporal: usize = recording_chunks(&chunks, entity)
@@ -231,9 +224,34 @@ fn every_sample_lands_on_its_entity() {
             .sum();
         assert_eq!(temporal, 2 * 3500, "{entity}: {rows:?}");
     }
+    // The carriage holds, per sample, the lower cart under the handle on its rail, the upper
+    // cart at the handle, and the handle itself (f32, as drawn).
+    let data = synthetic(3500);
+    let geometry = RigGeometry::with_workspace(0.15);
+    let centers = f32x2_values(&chunks, paths::CARRIAGE, "Boxes2D:centers");
+    let handle = f32x2_values(&chunks, paths::CARRIAGE, "Points2D:positions");
+    assert_eq!(centers.len(), 2 * 2 * 3500);
+    assert_eq!(handle.len(), 2 * 3500);
+    for (i, (boxes, hand)) in centers.chunks(2).zip(&handle).enumerate() {
+        let (x, y) = (data.x[i % 3500] as f32, data.y[i % 3500] as f32);
+        assert_eq!(
+            boxes,
+            [[x, geometry.lower_rail_y_m as f32], [x, y]],
+            "sample {i}"
+        );
+        assert_eq!(*hand, [x, y], "sample {i}");
+    }
+    let sizes = recording_chunks(&chunks, paths::CARRIAGE)
+        .filter(|c| c.is_static())
+        .flat_map(|c| {
+            c.iter_slices::<[f32; 2]>("Boxes2D:half_sizes".into())
+                .flat_map(|s| s.to_vec())
+                .collect::<Vec<_>>()
+        })
+        .count();
+    assert_eq!(sizes, 2, "one static size per cart");
     // Each x/y pair is one entity with two named lines; every sample of each column lands,
     // exactly (f64), on its line, trial after trial.
-    let data = synthetic(3500);
     let twice = |c: &[f64]| [c, c].concat();
     let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Right);
     let deg = |c: &[f64]| twice(&c.iter().map(|r| r.to_degrees()).collect::<Vec<_>>());

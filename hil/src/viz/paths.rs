@@ -4,13 +4,12 @@
 //! ```text
 //! rig/workspace            static  square workspace limit
 //! rig/rails/x              static  rail of the lower cart (along x)
-//! rig/rails/y              per sample  rail of the upper cart, carried by the lower cart
-//! rig/carts/lower          per sample  lower cart (box)
-//! rig/carts/upper          per sample  upper cart (box)
-//! rig/handle               per sample  handle = hand position
+//! rig/carriage             per sample  both carts (two boxes: lower, upper), the upper
+//!                                      cart's rail carried by the lower cart (strip) and
+//!                                      the handle = hand position (point)
 //! arm/shoulder             static  shoulder joint
-//! arm/links                per sample  shoulder–elbow–hand polyline
-//! arm/elbow                per sample  elbow joint
+//! arm/links                per sample  shoulder–elbow–hand polyline (strip) and the
+//!                                      elbow joint (point)
 //! trial/path               per trial   the trial's hand path
 //! trial/targets            per trial   start and goal
 //! trial/onset              per trial   hand at perturbation onset (cleared when unperturbed)
@@ -30,7 +29,10 @@
 //!
 //! Each pair of per-sample series is one entity with two scalars per row (rerun's `Scalars`
 //! with `SeriesLines` names), so the pair shares one set of timeline columns and row ids:
-//! a rehearsal's file is then about a third smaller than with one entity per line.
+//! a rehearsal's file is then about a third smaller than with one entity per line. For the
+//! same reason the moving parts of the scene are two entities, each holding several
+//! archetypes (boxes, strips, points) on one set of timeline columns; their sizes and colours
+//! are static rows.
 
 /// Root of the 2D scene.
 pub const SCENE: &str = "/";
@@ -38,20 +40,13 @@ pub const SCENE: &str = "/";
 pub const WORKSPACE: &str = "rig/workspace";
 /// Fixed rail of the lower cart.
 pub const RAIL_X: &str = "rig/rails/x";
-/// Moving rail of the upper cart.
-pub const RAIL_Y: &str = "rig/rails/y";
-/// Lower cart.
-pub const CART_LOWER: &str = "rig/carts/lower";
-/// Upper cart.
-pub const CART_UPPER: &str = "rig/carts/upper";
-/// Handle.
-pub const HANDLE: &str = "rig/handle";
+/// The moving parts of the rig: the lower and the upper cart (`Boxes2D`, two boxes in that
+/// order), the upper cart's rail (`LineStrips2D`) and the handle (`Points2D`).
+pub const CARRIAGE: &str = "rig/carriage";
 /// Shoulder.
 pub const SHOULDER: &str = "arm/shoulder";
-/// Upper arm and forearm.
+/// Upper arm and forearm (`LineStrips2D`) and the elbow (`Points2D`).
 pub const ARM_LINKS: &str = "arm/links";
-/// Elbow.
-pub const ELBOW: &str = "arm/elbow";
 /// Hand path of the current trial.
 pub const TRIAL_PATH: &str = "trial/path";
 /// Start and goal of the current trial.

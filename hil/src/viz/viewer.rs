@@ -194,26 +194,21 @@ impl Viewer {
             &LineStrips2D::new([[f32_point(-reach, rail), f32_point(reach, rail)]])
                 .with_colors([Color::from_rgb(90, 90, 90)]),
         )?;
-        self.send_static(
-            paths::RAIL_Y,
-            &LineStrips2D::update_fields().with_colors([Color::from_rgb(90, 90, 90)]),
-        )?;
+        // The carriage's sizes and colours, once: per sample only the centres are sent.
         let [lx, ly] = geometry.lower_cart_half_size_m;
-        self.send_static(
-            paths::CART_LOWER,
-            &Boxes2D::update_fields()
-                .with_half_sizes([f32_point(lx, ly)])
-                .with_colors([Color::from_rgb(200, 160, 60)]),
-        )?;
         let [ux, uy] = geometry.upper_cart_half_size_m;
         self.send_static(
-            paths::CART_UPPER,
+            paths::CARRIAGE,
             &Boxes2D::update_fields()
-                .with_half_sizes([f32_point(ux, uy)])
-                .with_colors([Color::from_rgb(220, 120, 40)]),
+                .with_half_sizes([f32_point(lx, ly), f32_point(ux, uy)])
+                .with_colors([Color::from_rgb(200, 160, 60), Color::from_rgb(220, 120, 40)]),
         )?;
         self.send_static(
-            paths::HANDLE,
+            paths::CARRIAGE,
+            &LineStrips2D::update_fields().with_colors([Color::from_rgb(90, 90, 90)]),
+        )?;
+        self.send_static(
+            paths::CARRIAGE,
             &Points2D::update_fields()
                 .with_radii([0.008f32])
                 .with_colors([Color::from_rgb(30, 30, 30)]),
@@ -264,42 +259,38 @@ impl Viewer {
         let times = Times::of(&stamps);
         let (x, y) = (columns.x_m, columns.y_m);
 
-        let hand: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], y[i])).collect();
-        self.send_columns(
-            paths::HANDLE,
-            Some(&times),
-            Points2D::update_fields()
-                .with_positions(hand.iter().copied())
-                .columns_of_unit_batches(),
-        )?;
-        self.send_columns(
-            paths::CART_UPPER,
-            Some(&times),
-            Boxes2D::update_fields()
-                .with_centers(hand.iter().copied())
-                .columns_of_unit_batches(),
-        )?;
+        // The carriage: both carts' centres (lower, upper), the upper cart's rail and the
+        // handle, one row per sample on one set of timeline columns.
         let rail_y = self.geometry.lower_rail_y_m;
-        let lower: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], rail_y)).collect();
-        self.send_columns(
-            paths::CART_LOWER,
-            Some(&times),
-            Boxes2D::update_fields()
-                .with_centers(lower)
-                .columns_of_unit_batches(),
-        )?;
         let top = self.geometry.workspace_half_width_m + self.geometry.upper_cart_half_size_m[1];
+        let hand: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], y[i])).collect();
+        let centers = picks
+            .iter()
+            .flat_map(|&i| [f32_point(x[i], rail_y), f32_point(x[i], y[i])]);
         let rails: Vec<[[f32; 2]; 2]> = picks
             .iter()
             .map(|&i| [f32_point(x[i], rail_y), f32_point(x[i], top)])
             .collect();
-        self.send_columns(
-            paths::RAIL_Y,
-            Some(&times),
+        let rows = picks.len();
+        let mut carriage = serialized(
+            paths::CARRIAGE,
+            Boxes2D::update_fields()
+                .with_centers(centers)
+                .columns(std::iter::repeat_n(2, rows)),
+        )?;
+        carriage.extend(serialized(
+            paths::CARRIAGE,
             LineStrips2D::update_fields()
                 .with_strips(rails)
                 .columns_of_unit_batches(),
-        )?;
+        )?);
+        carriage.extend(serialized(
+            paths::CARRIAGE,
+            Points2D::update_fields()
+                .with_positions(hand)
+                .columns_of_unit_batches(),
+        )?);
+        self.send_components(paths::CARRIAGE, Some(&times), carriage)?;
 
         let pairs = [
             (paths::POSITION, Some(x), Some(y)),
@@ -469,30 +460,29 @@ impl Viewer {
                     .with_radii([0.006f32]),
             )?;
             self.send_static(
-                paths::ELBOW,
+                paths::ARM_LINKS,
                 &Points2D::update_fields()
                     .with_colors([Color::from_rgb(60, 120, 200)])
                     .with_radii([0.01f32]),
             )?;
         }
-        self.send_columns(
-            paths::ARM_LINKS,
-            Some(&times),
-            LineStrips2D::update_fields()
-                .with_strips(links)
-                .columns_of_unit_batches(),
-        )?;
         let elbow: Vec<[f32; 2]> = picks
             .iter()
             .map(|&i| f32_point(arm.elbow_x_m[i], arm.elbow_y_m[i]))
             .collect();
-        self.send_columns(
-            paths::ELBOW,
-            Some(&times),
+        let mut pose = serialized(
+            paths::ARM_LINKS,
+            LineStrips2D::update_fields()
+                .with_strips(links)
+                .columns_of_unit_batches(),
+        )?;
+        pose.extend(serialized(
+            paths::ARM_LINKS,
             Points2D::update_fields()
                 .with_positions(elbow)
                 .columns_of_unit_batches(),
-        )?;
+        )?);
+        self.send_components(paths::ARM_LINKS, Some(&times), pose)?;
         let angles_deg = picks.iter().flat_map(|&i| {
             [
                 arm.shoulder_rad[i].to_degrees(),
@@ -674,17 +664,25 @@ impl Viewer {
     where
         I: Iterator<Item = SerializedComponentColumn>,
     {
-        let columns = columns.map_err(|source| VizError::Serialize {
-            entity: path.to_owned(),
-            source,
-        })?;
+        let columns = serialized(path, columns)?;
+        self.send_components(path, times, columns)
+    }
+
+    /// One chunk of `path`: the component columns (of one or several archetypes) on one set
+    /// of timeline columns.
+    fn send_components(
+        &mut self,
+        path: &str,
+        times: Option<&Times>,
+        columns: Vec<SerializedComponentColumn>,
+    ) -> Result<(), VizError> {
         let timelines = times
             .map(Times::columns)
             .unwrap_or_default()
             .into_iter()
             .map(|c| (*c.timeline().name(), c))
             .collect();
-        let components: ChunkComponents = columns.collect();
+        let components: ChunkComponents = columns.into_iter().collect();
         let chunk = Chunk::from_auto_row_ids(self.ids.chunk(), path.into(), timelines, components)
             .map_err(|source| VizError::Chunk {
                 entity: path.to_owned(),
@@ -727,6 +725,22 @@ impl Viewer {
             })?;
         self.sink.send(&self.store_id, chunk)
     }
+}
+
+/// The serialized columns of an archetype, or an error naming the entity.
+fn serialized<I>(
+    path: &str,
+    columns: Result<I, rerun::SerializationError>,
+) -> Result<Vec<SerializedComponentColumn>, VizError>
+where
+    I: Iterator<Item = SerializedComponentColumn>,
+{
+    columns
+        .map(Iterator::collect)
+        .map_err(|source| VizError::Serialize {
+            entity: path.to_owned(),
+            source,
+        })
 }
 
 fn store_id(app_id: &str, recording_id: &str) -> Result<StoreId, VizError> {
