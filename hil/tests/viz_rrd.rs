@@ -60,6 +60,46 @@ fn f64_values(chunks: &[(StoreKind, Chunk)], entity: &str, component: &'static s
         .collect()
 }
 
+/// Line `k` of a series entity: the `k`-th scalar of every temporal row, after checking that
+/// each row holds `width` scalars (one per named line).
+fn series_line(chunks: &[(StoreKind, Chunk)], entity: &str, k: usize, width: usize) -> Vec<f64> {
+    recording_chunks(chunks, entity)
+        .filter(|c| !c.is_static())
+        .flat_map(|c| {
+            c.iter_slices::<f64>("Scalars:scalars".into())
+                .map(|row| {
+                    assert_eq!(row.len(), width, "{entity}: scalars per row");
+                    row[k]
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The line names of a series entity, from its static `SeriesLines` row.
+fn line_names(chunks: &[(StoreKind, Chunk)], entity: &str) -> Vec<String> {
+    recording_chunks(chunks, entity)
+        .filter(|c| c.is_static())
+        .flat_map(|c| {
+            c.iter_slices::<String>("SeriesLines:names".into())
+                .flat_map(|names| names.into_iter().map(|n| n.to_string()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// Every per-sample series entity: the six x/y pairs of a trial and the arm angles, two lines
+/// each.
+const PAIRED_SERIES: [&str; 7] = [
+    paths::POSITION,
+    paths::VELOCITY,
+    paths::FORCE_SENSOR,
+    paths::FORCE_PERT,
+    paths::REFERENCE,
+    paths::COMMAND,
+    paths::ARM_ANGLES_DEG,
+];
+
 fn f32x2_values(
     chunks: &[(StoreKind, Chunk)],
     entity: &str,
@@ -175,22 +215,7 @@ fn synthetic_rrd() -> Vec<u8> {
 fn every_sample_lands_on_its_entity() {
     let chunks = decode(&synthetic_rrd());
     let rows = rows_per_entity(&chunks);
-    let per_sample = [
-        paths::HANDLE,
-        paths::CART_LOWER,
-        paths::CART_UPPER,
-        paths::RAIL_Y,
-        paths::ARM_LINKS,
-        paths::ELBOW,
-        "plots/position/x",
-        "plots/position/y",
-        "plots/force/sensor_x",
-        "plots/force/sensor_y",
-        "plots/force/pert_x",
-        "plots/force/pert_y",
-        paths::ARM_SHOULDER_DEG,
-        paths::ARM_ELBOW_DEG,
-    ];
+    let per_sample = [paths::CARRIAGE, paths::ARM_LINKS];
     for entity in per_sample {
         // Style or size rows are static (one row); the samples are the rest.
         let temporal: usize = recording_chunks(&chunks, entity)
@@ -199,7 +224,66 @@ fn every_sample_lands_on_its_entity() {
             .sum();
         assert_eq!(temporal, 2 * 3500, "{entity}: {rows:?}");
     }
-    for entity in ["plots/velocity/x", "plots/reference/x", "plots/command/x"] {
+    // The carriage holds, per sample, the lower cart under the handle on its rail, the upper
+    // cart at the handle, and the handle itself (f32, as drawn).
+    let data = synthetic(3500);
+    let geometry = RigGeometry::with_workspace(0.15);
+    let centers = f32x2_values(&chunks, paths::CARRIAGE, "Boxes2D:centers");
+    let handle = f32x2_values(&chunks, paths::CARRIAGE, "Points2D:positions");
+    assert_eq!(centers.len(), 2 * 2 * 3500);
+    assert_eq!(handle.len(), 2 * 3500);
+    for (i, (boxes, hand)) in centers.chunks(2).zip(&handle).enumerate() {
+        let (x, y) = (data.x[i % 3500] as f32, data.y[i % 3500] as f32);
+        assert_eq!(
+            boxes,
+            [[x, geometry.lower_rail_y_m as f32], [x, y]],
+            "sample {i}"
+        );
+        assert_eq!(*hand, [x, y], "sample {i}");
+    }
+    let sizes = recording_chunks(&chunks, paths::CARRIAGE)
+        .filter(|c| c.is_static())
+        .flat_map(|c| {
+            c.iter_slices::<[f32; 2]>("Boxes2D:half_sizes".into())
+                .flat_map(|s| s.to_vec())
+                .collect::<Vec<_>>()
+        })
+        .count();
+    assert_eq!(sizes, 2, "one static size per cart");
+    // Each x/y pair is one entity with two named lines; every sample of each column lands,
+    // exactly (f64), on its line, trial after trial.
+    let twice = |c: &[f64]| [c, c].concat();
+    let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Right);
+    let deg = |c: &[f64]| twice(&c.iter().map(|r| r.to_degrees()).collect::<Vec<_>>());
+    let recorded = [
+        (paths::POSITION, paths::XY, [twice(&data.x), twice(&data.y)]),
+        (
+            paths::FORCE_SENSOR,
+            paths::XY,
+            [twice(&data.f), twice(&data.f)],
+        ),
+        (
+            paths::FORCE_PERT,
+            paths::XY,
+            [twice(&data.pert), twice(&data.pert)],
+        ),
+        (
+            paths::ARM_ANGLES_DEG,
+            paths::ARM_ANGLE_NAMES,
+            [deg(&arm.shoulder_rad), deg(&arm.elbow_rad)],
+        ),
+    ];
+    for (entity, names, lines) in recorded {
+        assert_eq!(line_names(&chunks, entity), names, "{entity}");
+        for (k, want) in lines.iter().enumerate() {
+            assert_eq!(
+                &series_line(&chunks, entity, k, 2),
+                want,
+                "{entity} line {k}"
+            );
+        }
+    }
+    for entity in [paths::VELOCITY, paths::REFERENCE, paths::COMMAND] {
         assert!(
             !rows.contains_key(&format!("/{entity}")),
             "{entity} was not recorded"
@@ -226,7 +310,7 @@ fn every_sample_lands_on_its_entity() {
 #[test]
 fn samples_carry_tick_time_and_trial_and_no_wall_clock() {
     let chunks = decode(&synthetic_rrd());
-    let mut position = recording_chunks(&chunks, "plots/position/y");
+    let mut position = recording_chunks(&chunks, paths::POSITION);
     let first = position.find(|c| !c.is_static()).unwrap();
     let second = position.find(|c| !c.is_static()).unwrap();
     for chunk in chunks.iter().map(|(_, c)| c) {
@@ -422,20 +506,21 @@ fn example_session() -> &'static Path {
 fn assert_session_counts(chunks: &[(StoreKind, Chunk)], session: &Path) {
     let expected: usize = csv_rows(session).iter().sum();
     let rows = rows_per_entity(chunks);
-    for entity in [
-        "plots/position/x",
-        "plots/force/sensor_y",
-        "plots/force/pert_x",
-        "plots/velocity/y",
-        "plots/reference/x",
-        "plots/command/y",
-        paths::ARM_ELBOW_DEG,
-    ] {
-        let temporal: usize = recording_chunks(chunks, entity)
-            .filter(|c| !c.is_static())
-            .map(Chunk::num_rows)
-            .sum();
-        assert_eq!(temporal, expected, "{entity}: {rows:?}");
+    for entity in PAIRED_SERIES {
+        for k in 0..2 {
+            let line = series_line(chunks, entity, k, 2);
+            assert_eq!(line.len(), expected, "{entity} line {k}: {rows:?}");
+        }
+    }
+    // The handle's x and y, sample for sample as the CSV files hold them.
+    let session = Session::read(session).unwrap();
+    for (k, column) in [(0, "x_m"), (1, "y_m")] {
+        let want: Vec<f64> = session
+            .trials
+            .iter()
+            .flat_map(|t| t.column(column).unwrap().to_vec())
+            .collect();
+        assert_eq!(series_line(chunks, paths::POSITION, k, 2), want, "{column}");
     }
 }
 
@@ -495,4 +580,24 @@ fn rigtwin_view_refuses_a_bad_rerun_value_with_the_accepted_forms() {
         stderr.contains("expected `spawn`, `save=<file.rrd>`"),
         "{stderr}"
     );
+}
+
+#[test]
+fn a_lone_column_of_a_pair_keeps_its_line_and_the_other_is_empty() {
+    let data = synthetic(100);
+    let mut viewer = Viewer::in_memory("rigtwin", "lone").unwrap();
+    let cols = TrialColumns {
+        vy_m_per_s: Some(&data.f),
+        ..TrialColumns::required(
+            &data.t, &data.x, &data.y, &data.f, &data.f, &data.pert, &data.pert,
+        )
+    };
+    viewer.log_trial(&TrialMeta::new(0, 1000.0), &cols).unwrap();
+    let chunks = decode(&viewer.finish().unwrap().unwrap());
+    // Only vy was recorded: it stays the second line (y), the first holds NaN, which rerun
+    // draws as no point.
+    assert_eq!(series_line(&chunks, paths::VELOCITY, 1, 2), data.f);
+    let x = series_line(&chunks, paths::VELOCITY, 0, 2);
+    assert_eq!(x.len(), 100);
+    assert!(x.iter().all(|v| v.is_nan()), "{x:?}");
 }

@@ -19,7 +19,8 @@ use rigtwin::session::Session;
 Examples:
   rigtwin estimate ../shared/recordings/example-none
   rigtwin estimate out/reach-perturb-1/S01 --json
-  rigtwin estimate session/ --t-est-s 0.1 --mode consistent")]
+  rigtwin estimate session/ --t-est-s 0.1 --mode consistent
+  rigtwin estimate ../shared/recordings/example-friction --rerun save=k.rrd  # ellipses in the viewer")]
 pub struct Args {
     /// Session directory (holds session.toml and trials/).
     pub session: PathBuf,
@@ -45,6 +46,38 @@ pub struct Args {
     /// arm endpoint inertia at the trial's start.
     #[arg(long, value_name = "KG")]
     pub m_hat_kg: Option<f64>,
+
+    #[cfg(feature = "rerun")]
+    #[command(flatten)]
+    pub rerun: rigtwin::viz::RerunArgs,
+}
+
+/// Streams the session and the ellipses of the estimate just printed (same settings).
+#[cfg(feature = "rerun")]
+fn stream(args: &Args, session: &Session, config: &EstimateConfig) -> anyhow::Result<()> {
+    let Some(target) = &args.rerun.rerun else {
+        return Ok(());
+    };
+    let streamed = super::view::stream_session(
+        target,
+        session,
+        rigtwin::viz::DEFAULT_LIVE_RATE_HZ,
+        config,
+        args.m_hat_kg,
+    )?;
+    // Keep stdout JSON-only under --json.
+    let line = format!(
+        "viewer: {} samples, recording {}\n{}",
+        streamed.logged.samples,
+        streamed.recording_id,
+        super::view::target_line(target)
+    );
+    if args.json {
+        eprintln!("{line}");
+    } else {
+        println!("{line}");
+    }
+    Ok(())
 }
 
 fn run_piovesan(args: &Args, session: &Session) -> anyhow::Result<()> {
@@ -132,7 +165,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         .iter()
         .any(|t| t.perturbation.is_some());
     if !has_pulses && session.trials.iter().any(|t| !push_onsets(t).is_empty()) {
-        return run_piovesan(args, &session);
+        run_piovesan(args, &session)?;
+        #[cfg(feature = "rerun")]
+        stream(args, &session, &EstimateConfig::default())?;
+        return Ok(());
     }
     let config = EstimateConfig {
         t_est_s: args.t_est_s,
@@ -157,6 +193,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "result": est,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
+        #[cfg(feature = "rerun")]
+        stream(args, &session, &config)?;
         return Ok(());
     }
     let m = &session.manifest;
@@ -186,5 +224,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         "fit        condition number {:.1}, relative RMS residual {:.3}  (± = jackknife s.e. over trials)",
         est.condition_number, est.nrmse
     );
+    #[cfg(feature = "rerun")]
+    stream(args, &session, &config)?;
     Ok(())
 }

@@ -15,7 +15,8 @@ use serde::Serialize;
 #[command(after_help = "\
 Examples:
   rigtwin inspect ../shared/recordings/example-none
-  rigtwin inspect ../shared/recordings/example-friction --json | jq '.trials[0]'")]
+  rigtwin inspect ../shared/recordings/example-friction --json | jq '.trials[0]'
+  rigtwin inspect ../shared/recordings/example-friction --rerun save=f.rrd  # also to the viewer")]
 pub struct Args {
     /// Session directory (holds session.toml and trials/).
     pub session: PathBuf,
@@ -23,6 +24,10 @@ pub struct Args {
     /// Print the summary as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+
+    #[cfg(feature = "rerun")]
+    #[command(flatten)]
+    pub rerun: rigtwin::viz::RerunArgs,
 }
 
 /// One trial's line.
@@ -268,6 +273,30 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         println!("{text}");
     } else {
         print!("{}", render(&summary));
+    }
+    #[cfg(feature = "rerun")]
+    if let Some(target) = &args.rerun.rerun {
+        let session = Session::read(&args.session)
+            .with_context(|| format!("reading session {}", args.session.display()))?;
+        let streamed = super::view::stream_session(
+            target,
+            &session,
+            rigtwin::viz::DEFAULT_LIVE_RATE_HZ,
+            &rigtwin::protocol::EstimateConfig::default(),
+            None,
+        )?;
+        // Keep stdout JSON-only under --json.
+        let line = format!(
+            "viewer: {} samples, recording {}\n{}",
+            streamed.logged.samples,
+            streamed.recording_id,
+            super::view::target_line(target)
+        );
+        if args.json {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     Ok(())
 }

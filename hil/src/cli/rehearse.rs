@@ -7,6 +7,7 @@ use std::sync::atomic::AtomicBool;
 
 use anyhow::Context as _;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options, Progress};
 use rigtwin::report;
@@ -21,6 +22,8 @@ Examples:
   rigtwin rehearse hil/protocols/reach-perturb.toml             # seed from the file, out/reach-perturb-<seed>/
   rigtwin rehearse reach-perturb --subjects 5 --seed 7 --jobs 2  # built-in copy of the shipped protocol
   rigtwin rehearse my-protocol.toml --out runs/pilot --json
+  rigtwin rehearse hil/protocols/reach-perturb.toml --rerun save=r.rrd   # then: rerun r.rrd
+  rigtwin rehearse reach-perturb --model model.toml  # with `rigtwin diagnose --write-model`'s effects
 
 Shipped protocols (hil/protocols/, also built in by name): reach-perturb (000_*),
 hold-sinusoid (001_*), calibration-rig (001_* Appendix B).
@@ -54,6 +57,20 @@ pub struct Args {
     /// Print the report as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Extended model (`rigtwin diagnose --write-model`): its plant effects and stretch
+    /// reflex replace the protocol's before rehearsing.
+    #[arg(long, value_name = "MODEL.toml")]
+    pub model: Option<PathBuf>,
+
+    #[cfg(feature = "rerun")]
+    #[command(flatten)]
+    pub rerun: rigtwin::viz::RerunArgs,
+
+    /// Highest sample rate sent to a live viewer, Hz (a saved file holds every sample).
+    #[cfg(feature = "rerun")]
+    #[arg(long, value_name = "HZ", default_value_t = rigtwin::viz::DEFAULT_LIVE_RATE_HZ)]
+    pub live_rate_hz: f64,
 }
 
 fn default_jobs() -> usize {
@@ -66,7 +83,11 @@ fn default_jobs() -> usize {
 /// A bad protocol (naming the key), an output folder that is not empty, a model or
 /// writer failure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let protocol = Protocol::load(&args.protocol)?;
+    let mut protocol = Protocol::load(&args.protocol)?;
+    if let Some(path) = &args.model {
+        let model = ExtendedModel::read(path)?;
+        model.apply_to(&mut protocol);
+    }
     if args.subjects == Some(0) {
         anyhow::bail!("--subjects must be at least 1");
     }
@@ -113,6 +134,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let rep = report::build(&rehearsal);
     report::write(&rep, &out_dir)?;
+    #[cfg(feature = "rerun")]
+    if let Some(target) = &args.rerun.rerun {
+        stream(args, target, &rehearsal, &rep)?;
+    }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rep)?);
     } else {
@@ -122,6 +147,57 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             out_dir.display(),
             out_dir.join("report.md").display()
         );
+    }
+    Ok(())
+}
+
+/// Streams the rehearsal (its written sessions, safety events and ellipses) to `target`.
+#[cfg(feature = "rerun")]
+fn stream(
+    args: &Args,
+    target: &rigtwin::viz::Target,
+    rehearsal: &rehearse::Rehearsal,
+    rep: &report::Report,
+) -> anyhow::Result<()> {
+    use rigtwin::viz::{self, Target, Viewer};
+    let id = viz::rehearsal_recording_id(rehearsal)?;
+    let mut viewer =
+        Viewer::new(target, "rigtwin", &id).with_context(|| format!("opening --rerun {target}"))?;
+    viewer.set_live_rate_hz(args.live_rate_hz)?;
+    let logged = viz::log_rehearsal(&mut viewer, rehearsal, rep)
+        .with_context(|| format!("streaming the rehearsal to --rerun {target}"))?;
+    viewer
+        .finish()
+        .with_context(|| format!("finishing --rerun {target}"))?;
+    let samples: usize = logged.sessions.iter().map(|s| s.samples).sum();
+    let line = format!(
+        "viewer: {} sessions, {samples} samples, {} session estimates, {} onset truths, {} windows, {} safety events; recording {id}",
+        logged.sessions.len(),
+        logged.borner,
+        logged.onset_truths,
+        logged.windows,
+        logged.safety_events
+    );
+    // Keep stdout JSON-only under --json.
+    if args.json {
+        eprintln!("{line}");
+    } else {
+        println!("{line}");
+    }
+    match target {
+        Target::Save(path) => {
+            let msg = format!(
+                "written {}; open it with: rerun {}",
+                path.display(),
+                path.display()
+            );
+            if args.json {
+                eprintln!("{msg}");
+            } else {
+                println!("{msg}");
+            }
+        }
+        Target::Spawn | Target::Connect(_) => {}
     }
     Ok(())
 }

@@ -3,11 +3,14 @@
 use std::path::PathBuf;
 
 use anyhow::Context as _;
+use rigtwin::protocol::EstimateConfig;
 use rigtwin::session::Session;
 use rigtwin::viz::{self, RerunArgs, Target, Viewer};
 
 /// Show a recorded session (measured or simulated) in the rerun viewer: the rig and the arm
-/// in 2D, every channel as a time series, perturbation responses and events.
+/// in 2D, every channel as a time series, perturbation responses, events, and the impedance
+/// ellipses of the estimator `rigtwin estimate` runs on it (estimate only: a recorded session
+/// has no ground truth).
 #[derive(Debug, clap::Args)]
 #[command(after_help = "\
 Examples:
@@ -30,19 +33,75 @@ pub struct Args {
     pub live_rate_hz: f64,
 }
 
+/// What [`stream_session`] sent.
+pub struct Streamed {
+    /// The trials and samples.
+    pub logged: viz::Logged,
+    /// The estimates drawn.
+    pub estimates: viz::EstimatesLogged,
+    /// The recording id.
+    pub recording_id: String,
+}
+
+/// Streams a session to `target`: its samples ([`viz::log_session`]) and the impedance
+/// ellipses of the estimator `rigtwin estimate` runs on it, with `config` (Börner) or
+/// `m_hat_kg` (windowed regression). Shared by `view`, `inspect` and `estimate`.
+pub fn stream_session(
+    target: &Target,
+    session: &Session,
+    live_rate_hz: f64,
+    config: &EstimateConfig,
+    m_hat_kg: Option<f64>,
+) -> anyhow::Result<Streamed> {
+    let recording_id = viz::recording_id(session)?;
+    let mut viewer = Viewer::new(target, "rigtwin", &recording_id)
+        .with_context(|| format!("opening --rerun {target}"))?;
+    viewer.set_live_rate_hz(live_rate_hz)?;
+    let logged = viz::log_session(&mut viewer, session)?;
+    let estimates =
+        viz::log_session_estimates(&mut viewer, session, &logged.spans, config, m_hat_kg)?;
+    viewer
+        .finish()
+        .with_context(|| format!("finishing --rerun {target}"))?;
+    Ok(Streamed {
+        logged,
+        estimates,
+        recording_id,
+    })
+}
+
+/// One line saying where the viewer data went.
+pub fn target_line(target: &Target) -> String {
+    match target {
+        Target::Save(path) => {
+            let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
+            format!(
+                "written    {} ({:.1} MB); open it with: rerun {}",
+                path.display(),
+                size as f64 / 1e6,
+                path.display()
+            )
+        }
+        Target::Spawn | Target::Connect(_) => format!("streamed   {target}"),
+    }
+}
+
 /// Runs `rigtwin view`. Without `--rerun` a viewer is spawned.
 pub fn run(args: &Args) -> anyhow::Result<()> {
     let target = args.rerun.rerun.clone().unwrap_or(Target::Spawn);
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
-    let recording_id = viz::recording_id(&session)?;
-    let mut viewer = Viewer::new(&target, "rigtwin", &recording_id)
-        .with_context(|| format!("opening --rerun {target}"))?;
-    viewer.set_live_rate_hz(args.live_rate_hz)?;
-    let logged = viz::log_session(&mut viewer, &session)?;
-    viewer
-        .finish()
-        .with_context(|| format!("finishing --rerun {target}"))?;
+    let Streamed {
+        logged,
+        estimates,
+        recording_id,
+    } = stream_session(
+        &target,
+        &session,
+        args.live_rate_hz,
+        &EstimateConfig::default(),
+        None,
+    )?;
 
     let manifest = &session.manifest;
     println!(
@@ -65,18 +124,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         "drawn".to_owned()
     };
     println!("arm        {arm}");
+    let ellipses = match (estimates.borner, estimates.windows) {
+        (0, 0) => "none (nothing to estimate; see the event log)".to_owned(),
+        (0, w) => format!("{w} windowed-regression windows (001_*)"),
+        (_, _) => "Börner session estimate (000_*)".to_owned(),
+    };
+    println!("ellipses   {ellipses}");
     println!("recording  {recording_id}");
-    match &target {
-        Target::Save(path) => {
-            let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-            println!(
-                "written    {} ({:.1} MB); open it with: rerun {}",
-                path.display(),
-                size as f64 / 1e6,
-                path.display()
-            );
-        }
-        Target::Spawn | Target::Connect(_) => println!("streamed   {target}"),
-    }
+    println!("{}", target_line(&target));
     Ok(())
 }

@@ -196,6 +196,12 @@ pub struct PiovesanTrial {
     pub b_ns_per_m: Mat2,
     /// Mean canonical r².
     pub r2: f64,
+    /// Each window's estimate, in order (window `j` spans cycles `j .. j + windows`).
+    #[serde(skip)]
+    pub window_estimates: Vec<rigtwin_device::estimate::WindowEstimate>,
+    /// Onset row of each position perturbation (perturbation `i` is in cycle `i / 2`).
+    #[serde(skip)]
+    pub onsets: Vec<usize>,
 }
 
 /// Onsets of the position perturbations of a table, from its `pert_x_m, pert_y_m`
@@ -291,6 +297,8 @@ pub fn piovesan_on_session(
                         k_n_per_m: k,
                         b_ns_per_m: b,
                         r2: w.iter().map(|e| e.canonical_r2).sum::<f64>() / n,
+                        window_estimates: w,
+                        onsets: onsets.clone(),
                     }
                 }),
         );

@@ -91,7 +91,7 @@ fn layout() -> Node {
         "Impedance ellipses",
         "2D",
         paths::SCENE,
-        &["/ellipses/**", "/trial/path", "/rig/handle"],
+        &["/ellipses/**", "/trial/path", "/rig/carriage"],
     );
     let events = view("Events", "TextLog", "/events", &["$origin/**"]);
     let left = container(

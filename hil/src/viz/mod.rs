@@ -32,8 +32,10 @@ mod blueprint;
 mod columns;
 mod geometry;
 mod ids;
+pub mod impedance;
 mod overlay;
 pub mod paths;
+mod rehearsal;
 mod session;
 mod sink;
 mod target;
@@ -47,8 +49,13 @@ pub use geometry::{
     Elbow, EllipseAxes, RESPONSE_WINDOW_S, Response, ellipse_axes, ellipse_outline,
     two_link_inverse, variational_response,
 };
+pub use impedance::{
+    EstimatesLogged, Impedance, Which, log_borner, log_impedance, log_piovesan,
+    log_session_estimates,
+};
 pub use overlay::{Overlaid, OverlayError, log_diagnosis_overlay, log_replay_overlay};
-pub use session::{ARM_ANGLE_COLUMNS, Logged, log_session, recording_id};
+pub use rehearsal::{RehearsalLogged, log_rehearsal, rehearsal_recording_id};
+pub use session::{ARM_ANGLE_COLUMNS, Logged, log_session, log_session_at, recording_id};
 pub use target::{RerunArgs, Target, TargetParseError};
 pub use viewer::{DEFAULT_LIVE_RATE_HZ, Viewer};
 
@@ -120,4 +127,7 @@ pub enum VizError {
     /// Flushing a live stream failed.
     #[error("flushing the live stream: {0}")]
     Flush(String),
+    /// A session to be streamed did not read.
+    #[error("reading the session to stream it: {0}")]
+    Session(#[from] crate::session::SessionError),
 }

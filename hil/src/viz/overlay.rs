@@ -75,9 +75,9 @@ fn columns_of(trial: &Trial) -> TrialColumns<'_> {
     }
 }
 
-/// The axis of a column: 1 when its series entity ends in `y` (`…/y`, `…/sensor_y`).
+/// The axis of a column: its line in the paired series entity (0 = x, 1 = y).
 fn axis_of(column: &str) -> usize {
-    usize::from(paths::series(column).is_some_and(|p| p.ends_with('y')))
+    paths::series(column).map_or(0, |(_, line)| line)
 }
 
 /// Logs every channel of `trial` under `prefix` on `span`; returns the samples.

@@ -4,24 +4,23 @@
 //! ```text
 //! rig/workspace            static  square workspace limit
 //! rig/rails/x              static  rail of the lower cart (along x)
-//! rig/rails/y              per sample  rail of the upper cart, carried by the lower cart
-//! rig/carts/lower          per sample  lower cart (box)
-//! rig/carts/upper          per sample  upper cart (box)
-//! rig/handle               per sample  handle = hand position
+//! rig/carriage             per sample  both carts (two boxes: lower, upper), the upper
+//!                                      cart's rail carried by the lower cart (strip) and
+//!                                      the handle = hand position (point)
 //! arm/shoulder             static  shoulder joint
-//! arm/links                per sample  shoulder–elbow–hand polyline
-//! arm/elbow                per sample  elbow joint
+//! arm/links                per sample  shoulder–elbow–hand polyline (strip) and the
+//!                                      elbow joint (point)
 //! trial/path               per trial   the trial's hand path
 //! trial/targets            per trial   start and goal
 //! trial/onset              per trial   hand at perturbation onset (cleared when unperturbed)
 //! trial/perturbation       per trial   arrow: direction and size of the pulse
-//! plots/position/{x,y}     per sample  m
-//! plots/velocity/{x,y}     per sample  m/s (when recorded)
-//! plots/force/sensor_{x,y} per sample  N
-//! plots/force/pert_{x,y}   per sample  N
-//! plots/reference/{x,y}    per sample  m (when recorded)
-//! plots/command/{x,y}      per sample  N (when recorded)
-//! plots/arm/{shoulder,elbow}_deg  per sample  degrees
+//! plots/position          per sample  m, lines x and y
+//! plots/velocity          per sample  m/s, lines x and y (when recorded)
+//! plots/force/sensor      per sample  N, lines x and y
+//! plots/force/pert        per sample  N, lines x and y
+//! plots/reference         per sample  m, lines x and y (when recorded)
+//! plots/command           per sample  N, lines x and y (when recorded)
+//! plots/arm/angles_deg    per sample  degrees, lines shoulder and elbow
 //! plots/response/{x,y}_mm  per perturbed trial, 150 ms after onset, mm
 //! ellipses/<name>/outline  the image of the unit circle under the matrix (scaled)
 //! ellipses/<name>/axes     its principal semi-axes, labelled with the matrix
@@ -33,6 +32,13 @@
 //! predicted/plots/command/{x,y}/<model>  per evaluated row  motor command the cart force
 //!                                 balance of <model> predicts (`measured`: the command there)
 //! ```
+//!
+//! Each pair of per-sample series is one entity with two scalars per row (rerun's `Scalars`
+//! with `SeriesLines` names), so the pair shares one set of timeline columns and row ids:
+//! a rehearsal's file is then about a third smaller than with one entity per line. For the
+//! same reason the moving parts of the scene are two entities, each holding several
+//! archetypes (boxes, strips, points) on one set of timeline columns; their sizes and colours
+//! are static rows.
 
 /// Root of the 2D scene.
 pub const SCENE: &str = "/";
@@ -40,20 +46,13 @@ pub const SCENE: &str = "/";
 pub const WORKSPACE: &str = "rig/workspace";
 /// Fixed rail of the lower cart.
 pub const RAIL_X: &str = "rig/rails/x";
-/// Moving rail of the upper cart.
-pub const RAIL_Y: &str = "rig/rails/y";
-/// Lower cart.
-pub const CART_LOWER: &str = "rig/carts/lower";
-/// Upper cart.
-pub const CART_UPPER: &str = "rig/carts/upper";
-/// Handle.
-pub const HANDLE: &str = "rig/handle";
+/// The moving parts of the rig: the lower and the upper cart (`Boxes2D`, two boxes in that
+/// order), the upper cart's rail (`LineStrips2D`) and the handle (`Points2D`).
+pub const CARRIAGE: &str = "rig/carriage";
 /// Shoulder.
 pub const SHOULDER: &str = "arm/shoulder";
-/// Upper arm and forearm.
+/// Upper arm and forearm (`LineStrips2D`) and the elbow (`Points2D`).
 pub const ARM_LINKS: &str = "arm/links";
-/// Elbow.
-pub const ELBOW: &str = "arm/elbow";
 /// Hand path of the current trial.
 pub const TRIAL_PATH: &str = "trial/path";
 /// Start and goal of the current trial.
@@ -72,10 +71,24 @@ pub const EVENTS: &str = "events";
 pub const RESPONSE_X: &str = "plots/response/x_mm";
 /// Variational response, y.
 pub const RESPONSE_Y: &str = "plots/response/y_mm";
-/// Shoulder angle.
-pub const ARM_SHOULDER_DEG: &str = "plots/arm/shoulder_deg";
-/// Elbow angle.
-pub const ARM_ELBOW_DEG: &str = "plots/arm/elbow_deg";
+/// Names of the two lines of an x/y series, in the order of the scalars in each row.
+pub const XY: [&str; 2] = ["x", "y"];
+/// Handle position, m (x, y).
+pub const POSITION: &str = "plots/position";
+/// Handle velocity from the drive, m/s (x, y).
+pub const VELOCITY: &str = "plots/velocity";
+/// Force of the hand on the handle, N (x, y).
+pub const FORCE_SENSOR: &str = "plots/force/sensor";
+/// Perturbation force, N (x, y).
+pub const FORCE_PERT: &str = "plots/force/pert";
+/// Admittance position reference, m (x, y).
+pub const REFERENCE: &str = "plots/reference";
+/// Motor force command, N (x, y).
+pub const COMMAND: &str = "plots/command";
+/// Joint angles of the arm, degrees (shoulder, elbow).
+pub const ARM_ANGLES_DEG: &str = "plots/arm/angles_deg";
+/// Names of the two lines of [`ARM_ANGLES_DEG`], in the order of the scalars in each row.
+pub const ARM_ANGLE_NAMES: [&str; 2] = ["shoulder", "elbow"];
 
 /// Prefix of the measured channels in an overlay.
 pub const MEASURED: &str = "measured";
@@ -85,9 +98,10 @@ pub const SIMULATED: &str = "simulated";
 pub const PREDICTED_COMMAND: &str = "predicted/plots/command";
 
 /// The overlay entity of a trial column under `prefix` (`simulated`, `x_m` →
-/// `simulated/plots/position/x`), `None` for `t_s` and unknown names.
+/// `simulated/plots/position/x`): one entity per line, so measured and simulated
+/// copies of a column sit side by side; `None` for `t_s` and unknown names.
 pub fn overlay_series(prefix: &str, column: &str) -> Option<String> {
-    series(column).map(|s| format!("{prefix}/{s}"))
+    series(column).map(|(entity, line)| format!("{prefix}/{entity}/{}", ["x", "y"][line]))
 }
 
 /// The entity of the motor command on `axis` (0 = x, 1 = y) predicted by `model`
@@ -97,22 +111,22 @@ pub fn predicted_command(axis: usize, model: &str) -> String {
     format!("{PREDICTED_COMMAND}/{a}/{model}")
 }
 
-/// The time-series entity of a trial column (`x_m` → `plots/position/x`), `None` for `t_s`
-/// and unknown names.
-pub fn series(column: &str) -> Option<&'static str> {
+/// The time-series entity of a trial column and its place in each row (`y_m` →
+/// `("plots/position", 1)`), `None` for `t_s` and unknown names.
+pub fn series(column: &str) -> Option<(&'static str, usize)> {
     Some(match column {
-        "x_m" => "plots/position/x",
-        "y_m" => "plots/position/y",
-        "vx_m_per_s" => "plots/velocity/x",
-        "vy_m_per_s" => "plots/velocity/y",
-        "fx_n" => "plots/force/sensor_x",
-        "fy_n" => "plots/force/sensor_y",
-        "pert_fx_n" => "plots/force/pert_x",
-        "pert_fy_n" => "plots/force/pert_y",
-        "ref_x_m" => "plots/reference/x",
-        "ref_y_m" => "plots/reference/y",
-        "cmd_fx_n" => "plots/command/x",
-        "cmd_fy_n" => "plots/command/y",
+        "x_m" => (POSITION, 0),
+        "y_m" => (POSITION, 1),
+        "vx_m_per_s" => (VELOCITY, 0),
+        "vy_m_per_s" => (VELOCITY, 1),
+        "fx_n" => (FORCE_SENSOR, 0),
+        "fy_n" => (FORCE_SENSOR, 1),
+        "pert_fx_n" => (FORCE_PERT, 0),
+        "pert_fy_n" => (FORCE_PERT, 1),
+        "ref_x_m" => (REFERENCE, 0),
+        "ref_y_m" => (REFERENCE, 1),
+        "cmd_fx_n" => (COMMAND, 0),
+        "cmd_fy_n" => (COMMAND, 1),
         _ => return None,
     })
 }

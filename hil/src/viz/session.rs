@@ -3,7 +3,9 @@
 
 use sha2::{Digest as _, Sha256};
 
-use super::columns::{PerturbationMeta, PerturbationSize, RigGeometry, TrialColumns, TrialMeta};
+use super::columns::{
+    PerturbationMeta, PerturbationSize, RigGeometry, TrialColumns, TrialMeta, TrialSpan,
+};
 use super::geometry::{Elbow, two_link_inverse};
 use super::{ArmColumns, EventLevel, Viewer, VizError};
 use crate::session::{Amplitude, MANIFEST_FILE, Session};
@@ -17,7 +19,7 @@ pub const ARM_ANGLE_COLUMNS: [&str; 2] = ["shoulder_rad", "elbow_rad"];
 const DEFAULT_WORKSPACE_HALF_WIDTH_M: f64 = 0.15;
 
 /// What was sent.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Logged {
     /// Trials logged.
     pub trials: usize,
@@ -29,6 +31,8 @@ pub struct Logged {
     pub arm: bool,
     /// Samples whose hand position the arm cannot reach (drawn stretched).
     pub out_of_reach: usize,
+    /// Where each trial landed on the timelines, in manifest order.
+    pub spans: Vec<TrialSpan>,
 }
 
 /// A recording id that is a function of the session: the subject and the first 16 hex
@@ -45,6 +49,17 @@ pub fn recording_id(session: &Session) -> Result<String, VizError> {
 /// Logs a whole session: rig geometry, every trial in manifest order with its arm, and a
 /// summary event.
 pub fn log_session(viewer: &mut Viewer, session: &Session) -> Result<Logged, VizError> {
+    log_session_at(viewer, session, 0)
+}
+
+/// [`log_session`] with the session's first trial at `first_trial` on the `trial` timeline,
+/// for several sessions back to back in one recording (a rehearsal's subjects); the `tick`
+/// and `time` timelines continue from where the viewer is.
+pub fn log_session_at(
+    viewer: &mut Viewer,
+    session: &Session,
+    first_trial: u32,
+) -> Result<Logged, VizError> {
     let manifest = &session.manifest;
     let subject = &manifest.subject;
     let workspace = manifest
@@ -59,7 +74,9 @@ pub fn log_session(viewer: &mut Viewer, session: &Session) -> Result<Logged, Viz
 
     for (index, (entry, trial)) in session.iter().enumerate() {
         let meta = TrialMeta {
-            trial_index: u32::try_from(index).unwrap_or(u32::MAX),
+            trial_index: u32::try_from(index)
+                .unwrap_or(u32::MAX)
+                .saturating_add(first_trial),
             id: entry.id,
             kind: entry.kind.as_str().to_owned(),
             rate_hz: manifest.rate_hz,
@@ -93,6 +110,7 @@ pub fn log_session(viewer: &mut Viewer, session: &Session) -> Result<Logged, Viz
             )
         };
         let span = viewer.log_trial(&meta, &columns)?;
+        logged.spans.push(span);
         logged.trials += 1;
         logged.samples += trial.len();
         logged.perturbed += usize::from(meta.perturbation.is_some());

@@ -1,8 +1,8 @@
 //! Where the chunks go: a live viewer through rerun's `RecordingStream`, or rerun's `.rrd`
 //! encoder writing a file or a buffer.
 //!
-//! Files and buffers are written by the encoder directly, on the caller's thread, instead of
-//! through the SDK's batcher and file-writer thread: the SDK stamps its store-info message
+//! Files and buffers are written by rerun's encoder directly (on a thread of our own that
+//! takes the chunks in order) instead of through the SDK's batcher and file-writer thread: the SDK stamps its store-info message
 //! with a clock-based id and lets the flush timer decide chunk boundaries, which makes two
 //! saves of the same data differ. Writing ourselves keeps every byte a function of the input,
 //! and an I/O error reaches the caller instead of a log line.
@@ -10,6 +10,8 @@
 use std::fs::File;
 use std::io::{BufWriter, Write as _};
 use std::path::PathBuf;
+use std::sync::mpsc::{SyncSender, sync_channel};
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 use rerun::RecordingStream;
@@ -27,19 +29,114 @@ const LIVE_FLUSH_TIMEOUT: Duration = Duration::from_secs(30);
 
 pub(crate) enum Sink {
     Live(RecordingStream),
-    File {
-        encoder: Encoder<BufWriter<File>>,
-        path: PathBuf,
-    },
-    Memory(Encoder<Vec<u8>>),
+    /// A file or a buffer, encoded on a background thread.
+    Encoded(Background),
+}
+
+/// What the encoding thread is sent, in order.
+enum Item {
+    Msg(LogMsg),
+    Chunk(StoreId, Chunk),
+}
+
+/// Messages waiting for the encoder at most: enough to keep it busy, bounded so that a slow
+/// disk holds the producer back instead of memory growing.
+const QUEUE: usize = 256;
+
+/// The encoder on its own thread: the caller builds chunks while the previous ones are
+/// serialised, compressed and written (on 2 cores this takes most of the encoding off the
+/// caller's wall time). Messages keep their order, so the bytes are those of encoding on
+/// the caller's thread.
+pub(crate) struct Background {
+    tx: Option<SyncSender<Item>>,
+    handle: Option<JoinHandle<Result<Option<Vec<u8>>, VizError>>>,
+    what: String,
+}
+
+impl Background {
+    fn spawn<W, F>(mut encoder: Encoder<W>, what: String, finish: F) -> Result<Self, VizError>
+    where
+        W: std::io::Write + Send + 'static,
+        F: FnOnce(W) -> Result<Option<Vec<u8>>, VizError> + Send + 'static,
+    {
+        let (tx, rx) = sync_channel::<Item>(QUEUE);
+        let handle = std::thread::Builder::new()
+            .name("rrd-encoder".to_owned())
+            .spawn(move || {
+                for item in rx {
+                    let msg = match item {
+                        Item::Msg(msg) => msg,
+                        Item::Chunk(store_id, chunk) => {
+                            let entity = chunk.entity_path().to_string();
+                            let arrow = chunk
+                                .to_arrow_msg()
+                                .map_err(|source| VizError::Chunk { entity, source })?;
+                            LogMsg::ArrowMsg(store_id, arrow)
+                        }
+                    };
+                    encoder.append(&msg)?;
+                }
+                encoder.finish()?;
+                finish(encoder.into_inner()?)
+            })
+            .map_err(|source| VizError::Io {
+                path: PathBuf::from(&what),
+                source,
+            })?;
+        Ok(Self {
+            tx: Some(tx),
+            handle: Some(handle),
+            what,
+        })
+    }
+
+    fn send(&mut self, item: Item) -> Result<(), VizError> {
+        let sent = self.tx.as_ref().is_some_and(|tx| tx.send(item).is_ok());
+        if sent {
+            return Ok(());
+        }
+        // The thread stopped: it returns why.
+        self.tx = None;
+        match self.join() {
+            Err(err) => Err(err),
+            Ok(_) => Err(VizError::Flush(format!(
+                "the encoder of {} stopped early",
+                self.what
+            ))),
+        }
+    }
+
+    fn join(&mut self) -> Result<Option<Vec<u8>>, VizError> {
+        self.tx = None;
+        match self.handle.take() {
+            Some(handle) => handle.join().unwrap_or_else(|_| {
+                Err(VizError::Flush(format!(
+                    "the encoder of {} panicked",
+                    self.what
+                )))
+            }),
+            None => Err(VizError::Flush(format!(
+                "the encoder of {} has already stopped",
+                self.what
+            ))),
+        }
+    }
+}
+
+impl Drop for Background {
+    fn drop(&mut self) {
+        self.tx = None;
+        if let Some(handle) = self.handle.take() {
+            let _ = handle.join();
+        }
+    }
 }
 
 impl std::fmt::Debug for Sink {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             Self::Live(rec) => f.debug_tuple("Live").field(rec).finish(),
-            Self::File { path, .. } => f.debug_struct("File").field("path", path).finish(),
-            Self::Memory(_) => f.write_str("Memory"),
+            Self::Encoded(b) => f.debug_struct("Encoded").field("to", &b.what).finish(),
         }
     }
 }
@@ -68,14 +165,26 @@ impl Sink {
             path: path.clone(),
             source,
         })?;
-        Ok(Self::File {
-            encoder: encoder(BufWriter::new(file))?,
-            path,
-        })
+        let what = path.display().to_string();
+        let encoder = encoder(BufWriter::new(file))?;
+        Ok(Self::Encoded(Background::spawn(
+            encoder,
+            what,
+            move |mut write| {
+                write
+                    .flush()
+                    .map_err(|source| VizError::Io { path, source })?;
+                Ok(None)
+            },
+        )?))
     }
 
     pub(crate) fn memory() -> Result<Self, VizError> {
-        Ok(Self::Memory(encoder(Vec::new())?))
+        Ok(Self::Encoded(Background::spawn(
+            encoder(Vec::new())?,
+            "a memory buffer".to_owned(),
+            |bytes| Ok(Some(bytes)),
+        )?))
     }
 
     pub(crate) fn is_live(&self) -> bool {
@@ -89,20 +198,17 @@ impl Sink {
             row_id: *row_id,
             info: StoreInfo::new(store_id.clone(), store_source()),
         });
-        self.append(&msg)
+        self.append(msg)
     }
 
-    fn append(&mut self, msg: &LogMsg) -> Result<(), VizError> {
+    fn append(&mut self, msg: LogMsg) -> Result<(), VizError> {
         match self {
-            Self::Live(rec) => rec.record_msg(msg.clone()),
-            Self::File { encoder, .. } => {
-                encoder.append(msg)?;
+            Self::Live(rec) => {
+                rec.record_msg(msg);
+                Ok(())
             }
-            Self::Memory(encoder) => {
-                encoder.append(msg)?;
-            }
+            Self::Encoded(b) => b.send(Item::Msg(msg)),
         }
-        Ok(())
     }
 
     pub(crate) fn send(&mut self, store_id: &StoreId, chunk: Chunk) -> Result<(), VizError> {
@@ -111,13 +217,7 @@ impl Sink {
                 rec.send_chunk(chunk);
                 Ok(())
             }
-            Self::File { .. } | Self::Memory(_) => {
-                let entity = chunk.entity_path().to_string();
-                let arrow = chunk
-                    .to_arrow_msg()
-                    .map_err(|source| VizError::Chunk { entity, source })?;
-                self.append(&LogMsg::ArrowMsg(store_id.clone(), arrow))
-            }
+            Self::Encoded(b) => b.send(Item::Chunk(store_id.clone(), chunk)),
         }
     }
 
@@ -131,10 +231,10 @@ impl Sink {
             rec.send_blueprint(messages, activation);
             return Ok(());
         }
-        for msg in &messages {
+        for msg in messages {
             self.append(msg)?;
         }
-        self.append(&LogMsg::BlueprintActivationCommand(activation))
+        self.append(LogMsg::BlueprintActivationCommand(activation))
     }
 
     /// Ends the stream: writes the footer and flushes. Returns the bytes of a memory sink.
@@ -145,18 +245,7 @@ impl Sink {
                     .map_err(|err| VizError::Flush(err.to_string()))?;
                 Ok(None)
             }
-            Self::File { mut encoder, path } => {
-                encoder.finish()?;
-                let mut write = encoder.into_inner()?;
-                write
-                    .flush()
-                    .map_err(|source| VizError::Io { path, source })?;
-                Ok(None)
-            }
-            Self::Memory(mut encoder) => {
-                encoder.finish()?;
-                Ok(Some(encoder.into_inner()?))
-            }
+            Self::Encoded(mut b) => b.join(),
         }
     }
 }

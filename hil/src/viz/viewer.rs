@@ -23,6 +23,9 @@ use super::{VizError, blueprint, paths};
 /// Highest sample rate sent to a live viewer by default, Hz; files get every sample.
 pub const DEFAULT_LIVE_RATE_HZ: f64 = 500.0;
 
+/// Colour of an ellipse drawn by [`Viewer::log_ellipse`].
+const ELLIPSE_RGB: [u8; 3] = [170, 60, 170];
+
 /// Points on an ellipse outline.
 const ELLIPSE_SEGMENTS: usize = 128;
 
@@ -95,18 +98,11 @@ fn level_name(level: EventLevel) -> &'static str {
     }
 }
 
-fn series_color(path: &str) -> Color {
-    let rgb = if path.ends_with("/x") || path.ends_with("_x") || path.ends_with("x_mm") {
-        [230, 85, 60]
-    } else if path.ends_with("shoulder_deg") {
-        [120, 90, 200]
-    } else if path.ends_with("elbow_deg") {
-        [60, 170, 120]
-    } else {
-        [50, 120, 220]
-    };
-    Color::from_rgb(rgb[0], rgb[1], rgb[2])
-}
+/// Colours of the x and y lines of a series.
+const XY_RGB: [[u8; 3]; 2] = [[230, 85, 60], [50, 120, 220]];
+
+/// Colours of the shoulder and elbow angles.
+const ARM_ANGLES_RGB: [[u8; 3]; 2] = [[120, 90, 200], [60, 170, 120]];
 
 fn positive(what: &'static str, value: f64) -> Result<f64, VizError> {
     if value.is_finite() && value > 0.0 {
@@ -198,26 +194,21 @@ impl Viewer {
             &LineStrips2D::new([[f32_point(-reach, rail), f32_point(reach, rail)]])
                 .with_colors([Color::from_rgb(90, 90, 90)]),
         )?;
-        self.send_static(
-            paths::RAIL_Y,
-            &LineStrips2D::update_fields().with_colors([Color::from_rgb(90, 90, 90)]),
-        )?;
+        // The carriage's sizes and colours, once: per sample only the centres are sent.
         let [lx, ly] = geometry.lower_cart_half_size_m;
-        self.send_static(
-            paths::CART_LOWER,
-            &Boxes2D::update_fields()
-                .with_half_sizes([f32_point(lx, ly)])
-                .with_colors([Color::from_rgb(200, 160, 60)]),
-        )?;
         let [ux, uy] = geometry.upper_cart_half_size_m;
         self.send_static(
-            paths::CART_UPPER,
+            paths::CARRIAGE,
             &Boxes2D::update_fields()
-                .with_half_sizes([f32_point(ux, uy)])
-                .with_colors([Color::from_rgb(220, 120, 40)]),
+                .with_half_sizes([f32_point(lx, ly), f32_point(ux, uy)])
+                .with_colors([Color::from_rgb(200, 160, 60), Color::from_rgb(220, 120, 40)]),
         )?;
         self.send_static(
-            paths::HANDLE,
+            paths::CARRIAGE,
+            &LineStrips2D::update_fields().with_colors([Color::from_rgb(90, 90, 90)]),
+        )?;
+        self.send_static(
+            paths::CARRIAGE,
             &Points2D::update_fields()
                 .with_radii([0.008f32])
                 .with_colors([Color::from_rgb(30, 30, 30)]),
@@ -268,47 +259,60 @@ impl Viewer {
         let times = Times::of(&stamps);
         let (x, y) = (columns.x_m, columns.y_m);
 
-        let hand: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], y[i])).collect();
-        self.send_columns(
-            paths::HANDLE,
-            Some(&times),
-            Points2D::update_fields()
-                .with_positions(hand.iter().copied())
-                .columns_of_unit_batches(),
-        )?;
-        self.send_columns(
-            paths::CART_UPPER,
-            Some(&times),
-            Boxes2D::update_fields()
-                .with_centers(hand.iter().copied())
-                .columns_of_unit_batches(),
-        )?;
+        // The carriage: both carts' centres (lower, upper), the upper cart's rail and the
+        // handle, one row per sample on one set of timeline columns.
         let rail_y = self.geometry.lower_rail_y_m;
-        let lower: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], rail_y)).collect();
-        self.send_columns(
-            paths::CART_LOWER,
-            Some(&times),
-            Boxes2D::update_fields()
-                .with_centers(lower)
-                .columns_of_unit_batches(),
-        )?;
         let top = self.geometry.workspace_half_width_m + self.geometry.upper_cart_half_size_m[1];
+        let hand: Vec<[f32; 2]> = picks.iter().map(|&i| f32_point(x[i], y[i])).collect();
+        let centers = picks
+            .iter()
+            .flat_map(|&i| [f32_point(x[i], rail_y), f32_point(x[i], y[i])]);
         let rails: Vec<[[f32; 2]; 2]> = picks
             .iter()
             .map(|&i| [f32_point(x[i], rail_y), f32_point(x[i], top)])
             .collect();
-        self.send_columns(
-            paths::RAIL_Y,
-            Some(&times),
+        let rows = picks.len();
+        let mut carriage = serialized(
+            paths::CARRIAGE,
+            Boxes2D::update_fields()
+                .with_centers(centers)
+                .columns(std::iter::repeat_n(2, rows)),
+        )?;
+        carriage.extend(serialized(
+            paths::CARRIAGE,
             LineStrips2D::update_fields()
                 .with_strips(rails)
                 .columns_of_unit_batches(),
-        )?;
+        )?);
+        carriage.extend(serialized(
+            paths::CARRIAGE,
+            Points2D::update_fields()
+                .with_positions(hand)
+                .columns_of_unit_batches(),
+        )?);
+        self.send_components(paths::CARRIAGE, Some(&times), carriage)?;
 
-        for (name, values) in columns.named() {
-            if let Some(path) = paths::series(name) {
-                self.send_series(path, name, &times, picks.iter().map(|&i| values[i]))?;
+        let pairs = [
+            (paths::POSITION, Some(x), Some(y)),
+            (paths::FORCE_SENSOR, Some(columns.fx_n), Some(columns.fy_n)),
+            (
+                paths::FORCE_PERT,
+                Some(columns.pert_fx_n),
+                Some(columns.pert_fy_n),
+            ),
+            (paths::VELOCITY, columns.vx_m_per_s, columns.vy_m_per_s),
+            (paths::REFERENCE, columns.ref_x_m, columns.ref_y_m),
+            (paths::COMMAND, columns.cmd_fx_n, columns.cmd_fy_n),
+        ];
+        for (path, a, b) in pairs {
+            if a.is_none() && b.is_none() {
+                continue;
             }
+            // A lone x or y column keeps its place in the row; the other line is NaN (no
+            // points drawn), so the entity always has the same two named lines.
+            let at = |c: Option<&[f64]>, i: usize| c.map_or(f64::NAN, |c| c[i]);
+            let values = picks.iter().flat_map(|&i| [at(a, i), at(b, i)]);
+            self.send_series(path, paths::XY, XY_RGB, &times, values)?;
         }
 
         self.log_trial_overlay(meta, columns, &span)?;
@@ -384,13 +388,15 @@ impl Viewer {
                 let times = Times::of(&stamps);
                 self.send_series(
                     paths::RESPONSE_X,
-                    "x",
+                    ["x"],
+                    [XY_RGB[0]],
                     &times,
                     r.dx_m.iter().map(|d| d * 1e3),
                 )?;
                 self.send_series(
                     paths::RESPONSE_Y,
-                    "y",
+                    ["y"],
+                    [XY_RGB[1]],
                     &times,
                     r.dy_m.iter().map(|d| d * 1e3),
                 )?;
@@ -453,34 +459,42 @@ impl Viewer {
                     .with_radii([0.006f32]),
             )?;
             self.send_static(
-                paths::ELBOW,
+                paths::ARM_LINKS,
                 &Points2D::update_fields()
                     .with_colors([Color::from_rgb(60, 120, 200)])
                     .with_radii([0.01f32]),
             )?;
         }
-        self.send_columns(
-            paths::ARM_LINKS,
-            Some(&times),
-            LineStrips2D::update_fields()
-                .with_strips(links)
-                .columns_of_unit_batches(),
-        )?;
         let elbow: Vec<[f32; 2]> = picks
             .iter()
             .map(|&i| f32_point(arm.elbow_x_m[i], arm.elbow_y_m[i]))
             .collect();
-        self.send_columns(
-            paths::ELBOW,
-            Some(&times),
+        let mut pose = serialized(
+            paths::ARM_LINKS,
+            LineStrips2D::update_fields()
+                .with_strips(links)
+                .columns_of_unit_batches(),
+        )?;
+        pose.extend(serialized(
+            paths::ARM_LINKS,
             Points2D::update_fields()
                 .with_positions(elbow)
                 .columns_of_unit_batches(),
-        )?;
-        let shoulder_deg = picks.iter().map(|&i| arm.shoulder_rad[i].to_degrees());
-        self.send_series(paths::ARM_SHOULDER_DEG, "shoulder", &times, shoulder_deg)?;
-        let elbow_deg = picks.iter().map(|&i| arm.elbow_rad[i].to_degrees());
-        self.send_series(paths::ARM_ELBOW_DEG, "elbow", &times, elbow_deg)
+        )?);
+        self.send_components(paths::ARM_LINKS, Some(&times), pose)?;
+        let angles_deg = picks.iter().flat_map(|&i| {
+            [
+                arm.shoulder_rad[i].to_degrees(),
+                arm.elbow_rad[i].to_degrees(),
+            ]
+        });
+        self.send_series(
+            paths::ARM_ANGLES_DEG,
+            paths::ARM_ANGLE_NAMES,
+            ARM_ANGLES_RGB,
+            &times,
+            angles_deg,
+        )
     }
 
     /// Draws a 2x2 matrix `m` (row-major; a stiffness `K` in N/m, a damping `D` in N s/m) as
@@ -499,6 +513,23 @@ impl Viewer {
         scale: f64,
         label: &str,
     ) -> Result<EllipseAxes, VizError> {
+        self.log_ellipse_rgb(name, at, center, m, scale, label, ELLIPSE_RGB)
+    }
+
+    /// [`Self::log_ellipse`] in the colour `rgb` (e.g. an estimate and the ground truth side
+    /// by side).
+    #[allow(clippy::too_many_arguments)]
+    pub fn log_ellipse_rgb(
+        &mut self,
+        name: &str,
+        at: Option<Stamp>,
+        center: [f64; 2],
+        m: [[f64; 2]; 2],
+        scale: f64,
+        label: &str,
+        rgb: [u8; 3],
+    ) -> Result<EllipseAxes, VizError> {
+        let color = Color::from_rgb(rgb[0], rgb[1], rgb[2]);
         let scale = positive("ellipse scale", scale)?;
         if name.trim().is_empty() {
             return Err(VizError::InvalidId {
@@ -517,7 +548,7 @@ impl Viewer {
         );
         let outline_arch = LineStrips2D::new([outline])
             .with_labels([text])
-            .with_colors([Color::from_rgb(170, 60, 170)]);
+            .with_colors([color]);
         let vectors: Vec<[f32; 2]> = (0..2)
             .map(|k| {
                 let l = scale * axes.lengths[k];
@@ -530,7 +561,7 @@ impl Viewer {
                 format!("{:.1}", axes.lengths[0]),
                 format!("{:.1}", axes.lengths[1]),
             ])
-            .with_colors([Color::from_rgb(170, 60, 170)]);
+            .with_colors([color]);
         let (outline_path, axes_path) = (paths::ellipse_outline(name), paths::ellipse_axes(name));
         match at {
             Some(stamp) => {
@@ -543,6 +574,26 @@ impl Viewer {
             }
         }
         Ok(axes)
+    }
+
+    /// The four entries of a 2x2 matrix `m` (row-major) as one row of four scalars at `at`,
+    /// one plotted line per entry named by `names` (`K11`, `K12`, `K21`, `K22`). The values
+    /// are stored as `f64`, exactly as given (the outline and arrows of an ellipse are `f32`).
+    pub fn log_matrix(
+        &mut self,
+        path: &'static str,
+        at: Stamp,
+        names: [&str; 4],
+        m: [[f64; 2]; 2],
+    ) -> Result<(), VizError> {
+        if self.styled.insert(path.to_owned()) {
+            self.send_static(path, &SeriesLines::new().with_names(names))?;
+        }
+        self.send_row(
+            path,
+            at,
+            &Scalars::new([m[0][0], m[0][1], m[1][0], m[1][1]]),
+        )
     }
 
     /// A text entry in the event log (safety events, protocol steps).
@@ -617,38 +668,39 @@ impl Viewer {
         let picks: Vec<usize> = (0..n).step_by(stride).collect();
         let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
         let times = Times::of(&stamps);
-        let color = Color::from_rgb(rgb[0], rgb[1], rgb[2]);
-        self.send_series_colored(path, name, color, &times, picks.iter().map(|&i| values[i]))
+        self.send_series(
+            path,
+            [name],
+            [rgb],
+            &times,
+            picks.iter().map(|&i| values[i]),
+        )
     }
 
-    fn send_series(
-        &mut self,
-        path: &'static str,
-        name: &str,
-        times: &Times,
-        values: impl Iterator<Item = f64>,
-    ) -> Result<(), VizError> {
-        self.send_series_colored(path, name, series_color(path), times, values)
-    }
-
-    fn send_series_colored(
+    /// Sends `W` scalars per row (`values` row after row, one row per entry of `times`),
+    /// one plotted line per scalar named by `names`; the names and colours go out once, as
+    /// static rows.
+    fn send_series<const W: usize>(
         &mut self,
         path: &str,
-        name: &str,
-        color: Color,
+        names: [&str; W],
+        rgb: [[u8; 3]; W],
         times: &Times,
         values: impl Iterator<Item = f64>,
     ) -> Result<(), VizError> {
         if self.styled.insert(path.to_owned()) {
             self.send_static(
                 path,
-                &SeriesLines::new().with_names([name]).with_colors([color]),
+                &SeriesLines::new()
+                    .with_names(names)
+                    .with_colors(rgb.map(|[r, g, b]| Color::from_rgb(r, g, b))),
             )?;
         }
+        let rows = times.tick.len();
         self.send_columns(
             path,
             Some(times),
-            Scalars::new(values).columns_of_unit_batches(),
+            Scalars::new(values).columns(std::iter::repeat_n(W, rows)),
         )
     }
 
@@ -661,17 +713,25 @@ impl Viewer {
     where
         I: Iterator<Item = SerializedComponentColumn>,
     {
-        let columns = columns.map_err(|source| VizError::Serialize {
-            entity: path.to_owned(),
-            source,
-        })?;
+        let columns = serialized(path, columns)?;
+        self.send_components(path, times, columns)
+    }
+
+    /// One chunk of `path`: the component columns (of one or several archetypes) on one set
+    /// of timeline columns.
+    fn send_components(
+        &mut self,
+        path: &str,
+        times: Option<&Times>,
+        columns: Vec<SerializedComponentColumn>,
+    ) -> Result<(), VizError> {
         let timelines = times
             .map(Times::columns)
             .unwrap_or_default()
             .into_iter()
             .map(|c| (*c.timeline().name(), c))
             .collect();
-        let components: ChunkComponents = columns.collect();
+        let components: ChunkComponents = columns.into_iter().collect();
         let chunk = Chunk::from_auto_row_ids(self.ids.chunk(), path.into(), timelines, components)
             .map_err(|source| VizError::Chunk {
                 entity: path.to_owned(),
@@ -714,6 +774,22 @@ impl Viewer {
             })?;
         self.sink.send(&self.store_id, chunk)
     }
+}
+
+/// The serialized columns of an archetype, or an error naming the entity.
+fn serialized<I>(
+    path: &str,
+    columns: Result<I, rerun::SerializationError>,
+) -> Result<Vec<SerializedComponentColumn>, VizError>
+where
+    I: Iterator<Item = SerializedComponentColumn>,
+{
+    columns
+        .map(Iterator::collect)
+        .map_err(|source| VizError::Serialize {
+            entity: path.to_owned(),
+            source,
+        })
 }
 
 fn store_id(app_id: &str, recording_id: &str) -> Result<StoreId, VizError> {
