@@ -155,10 +155,9 @@ fn compare_overlays_every_measured_and_simulated_sample_on_one_timeline() {
         ],
         &dir.path().join("again.rrd"),
     );
-    assert_eq!(
-        scalars(&again, "simulated/plots/force/sensor_x"),
-        scalars(&chunks, "simulated/plots/force/sensor_x")
-    );
+    let fx = paths::overlay_series(paths::SIMULATED, "fx_n").unwrap();
+    assert_eq!(scalars(&chunks, &fx).len(), measured_samples, "{fx}");
+    assert_eq!(scalars(&again, &fx), scalars(&chunks, &fx));
     assert_eq!(
         std::fs::read(&rrd).unwrap().len(),
         std::fs::read(dir.path().join("again.rrd")).unwrap().len()
@@ -178,8 +177,9 @@ fn diagnose_overlays_the_session_and_the_predicted_command_of_baseline_and_cause
     );
     // The session itself, sample for sample.
     let samples: usize = session.trials.iter().map(|t| t.len()).sum();
-    assert_eq!(rows(&chunks, "plots/position/x"), samples);
-    assert_eq!(rows(&chunks, "plots/command/y"), samples);
+    // (each x/y pair is one entity with one row per sample)
+    assert_eq!(rows(&chunks, paths::POSITION), samples);
+    assert_eq!(rows(&chunks, paths::COMMAND), samples);
 
     // The predicted commands, on the same evaluated rows for every model.
     let measured = paths::predicted_command(1, paths::MEASURED);
