@@ -65,18 +65,7 @@ fn stream(args: &Args, session: &Session, config: &EstimateConfig) -> anyhow::Re
         config,
         args.m_hat_kg,
     )?;
-    // Keep stdout JSON-only under --json.
-    let line = format!(
-        "viewer: {} samples, recording {}\n{}",
-        streamed.logged.samples,
-        streamed.recording_id,
-        super::view::target_line(target)
-    );
-    if args.json {
-        eprintln!("{line}");
-    } else {
-        println!("{line}");
-    }
+    super::view::report_streamed(&streamed, target, args.json);
     Ok(())
 }
 

@@ -285,18 +285,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &rigtwin::protocol::EstimateConfig::default(),
             None,
         )?;
-        // Keep stdout JSON-only under --json.
-        let line = format!(
-            "viewer: {} samples, recording {}\n{}",
-            streamed.logged.samples,
-            streamed.recording_id,
-            super::view::target_line(target)
-        );
-        if args.json {
-            eprintln!("{line}");
-        } else {
-            println!("{line}");
-        }
+        super::view::report_streamed(&streamed, target, args.json);
     }
     Ok(())
 }

@@ -71,6 +71,23 @@ pub fn stream_session(
 }
 
 /// One line saying where the viewer data went.
+/// Says what went to the viewer: on stdout, or on stderr under `--json` (stdout stays
+/// JSON-only).
+pub fn report_streamed(streamed: &Streamed, target: &Target, json: bool) {
+    let line = format!(
+        "viewer: {} samples, recording {}\n{}",
+        streamed.logged.samples,
+        streamed.recording_id,
+        target_line(target)
+    );
+    if json {
+        eprintln!("{line}");
+    } else {
+        println!("{line}");
+    }
+}
+
+/// What `--rerun` will have produced, in one line.
 pub fn target_line(target: &Target) -> String {
     match target {
         Target::Save(path) => {

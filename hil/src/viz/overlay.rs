@@ -12,7 +12,7 @@
 //!
 //! Entity paths are in [`super::paths`].
 
-use super::columns::{Stamp, TrialColumns, TrialSpan};
+use super::columns::{Stamp, TrialSpan};
 use super::{EventLevel, Viewer, VizError, paths};
 use crate::discrepancy::{Analysis, Baseline, Candidate as _, DiscrepancyError, Folds};
 use crate::session::{Session, Trial};
@@ -54,27 +54,6 @@ pub enum OverlayError {
     Discrepancy(#[from] DiscrepancyError),
 }
 
-/// The columns of a session table, as [`TrialColumns`].
-fn columns_of(trial: &Trial) -> TrialColumns<'_> {
-    TrialColumns {
-        vx_m_per_s: trial.vx_m_per_s.as_deref(),
-        vy_m_per_s: trial.vy_m_per_s.as_deref(),
-        ref_x_m: trial.ref_x_m.as_deref(),
-        ref_y_m: trial.ref_y_m.as_deref(),
-        cmd_fx_n: trial.cmd_fx_n.as_deref(),
-        cmd_fy_n: trial.cmd_fy_n.as_deref(),
-        ..TrialColumns::required(
-            &trial.t_s,
-            &trial.x_m,
-            &trial.y_m,
-            &trial.fx_n,
-            &trial.fy_n,
-            &trial.pert_fx_n,
-            &trial.pert_fy_n,
-        )
-    }
-}
-
 /// The axis of a column: its line in the paired series entity (0 = x, 1 = y).
 fn axis_of(column: &str) -> usize {
     paths::series(column).map_or(0, |(_, line)| line)
@@ -88,7 +67,7 @@ fn log_prefixed(
     span: &TrialSpan,
     trial: &Trial,
 ) -> Result<usize, VizError> {
-    let columns = columns_of(trial);
+    let columns = super::session::columns_of(trial);
     columns.check()?;
     for (name, values) in columns.named() {
         if let Some(path) = paths::overlay_series(prefix, name) {

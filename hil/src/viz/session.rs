@@ -8,7 +8,7 @@ use super::columns::{
 };
 use super::geometry::{Elbow, two_link_inverse};
 use super::{ArmColumns, EventLevel, Viewer, VizError};
-use crate::session::{Amplitude, MANIFEST_FILE, Session};
+use crate::session::{Amplitude, MANIFEST_FILE, Session, Trial};
 
 /// Extra trial columns with the arm's joint angles, rad (shoulder from +x toward +y, elbow
 /// relative to the upper arm). A simulated session that records them is drawn from them;
@@ -92,23 +92,7 @@ pub fn log_session_at(
                 angle_deg: p.angle_deg,
             }),
         };
-        let columns = TrialColumns {
-            vx_m_per_s: trial.vx_m_per_s.as_deref(),
-            vy_m_per_s: trial.vy_m_per_s.as_deref(),
-            ref_x_m: trial.ref_x_m.as_deref(),
-            ref_y_m: trial.ref_y_m.as_deref(),
-            cmd_fx_n: trial.cmd_fx_n.as_deref(),
-            cmd_fy_n: trial.cmd_fy_n.as_deref(),
-            ..TrialColumns::required(
-                &trial.t_s,
-                &trial.x_m,
-                &trial.y_m,
-                &trial.fx_n,
-                &trial.fy_n,
-                &trial.pert_fx_n,
-                &trial.pert_fy_n,
-            )
-        };
+        let columns = columns_of(trial);
         let span = viewer.log_trial(&meta, &columns)?;
         logged.spans.push(span);
         logged.trials += 1;
@@ -183,4 +167,25 @@ pub fn log_session_at(
     };
     viewer.log_event(end, level, &text)?;
     Ok(logged)
+}
+
+/// The columns of a session table, as [`TrialColumns`] (the optional ones when recorded).
+pub(crate) fn columns_of(trial: &Trial) -> TrialColumns<'_> {
+    TrialColumns {
+        vx_m_per_s: trial.vx_m_per_s.as_deref(),
+        vy_m_per_s: trial.vy_m_per_s.as_deref(),
+        ref_x_m: trial.ref_x_m.as_deref(),
+        ref_y_m: trial.ref_y_m.as_deref(),
+        cmd_fx_n: trial.cmd_fx_n.as_deref(),
+        cmd_fy_n: trial.cmd_fy_n.as_deref(),
+        ..TrialColumns::required(
+            &trial.t_s,
+            &trial.x_m,
+            &trial.y_m,
+            &trial.fx_n,
+            &trial.fy_n,
+            &trial.pert_fx_n,
+            &trial.pert_fy_n,
+        )
+    }
 }
