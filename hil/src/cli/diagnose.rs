@@ -7,13 +7,15 @@ use anyhow::Context as _;
 use rigtwin::discrepancy::{DiagnoseOptions, ExtendedModel, diagnose, table, write_report};
 use rigtwin::session::Session;
 
-/// Name the plant effect that the nominal model misses in a measured session. Fits every
-/// plant-side catalog effect (rail-friction, force-ripple, actuation-delay,
-/// sensor-rotation) to the force balance of the carts, m·a = u(t − τ) + F + effect, on
-/// training trials, judges each on held-out trials against the nominal balance, and
-/// names the cause only when its gain is beyond chance (fold t-test) and material
-/// (≥ 10 %). Needs the motor command columns cmd_fx_n, cmd_fy_n. Writes diagnosis.md
-/// with PNG figures into <session>/diagnosis (or --report-dir).
+/// Name the effect, of the plant or of the human, that the nominal model misses in a
+/// measured session. Fits the plant-side catalog effects (rail-friction, force-ripple,
+/// actuation-delay, sensor-rotation) to the force balance of the carts,
+/// m·a = u(t − τ) + F + effect (needs cmd_fx_n, cmd_fy_n), and the human-side ones
+/// (grip-compliance, handle-mass, stretch-reflex) to the hand balance of the force-pulse
+/// responses (needs ≥ 8 perturbed and 2 unperturbed trials), on training folds; judges
+/// each on held-out folds against its balance's nominal model, and names the cause only
+/// when its gain is beyond chance (fold t-test) and material (≥ 10 %), a plant-side one
+/// first. Writes diagnosis.md with PNG figures into <session>/diagnosis (or --report-dir).
 #[derive(Debug, Clone, clap::Args)]
 #[command(after_help = "\
 Examples:

@@ -40,7 +40,7 @@ pub enum Command {
     Rehearse(rehearse::Args),
     /// Estimate impedance from a session's perturbed trials (measured or simulated).
     Estimate(estimate::Args),
-    /// Name the plant effect the nominal model misses in a measured session.
+    /// Name the plant or human effect the nominal model misses in a measured session.
     Diagnose(diagnose::Args),
     /// Replay a session in simulation: the fitted subject, error per channel, phase and band,
     /// D and K measured vs simulated.
