@@ -93,3 +93,24 @@ fn help_shows_examples() {
         "{text}"
     );
 }
+
+/// A reader that is gone before the command prints (`rigtwin inspect ... | head` after
+/// head has quit): no panic message, a zero exit. The pipe's read end is closed right
+/// after the spawn, while the command is still reading the session's 32 trials, so its
+/// first line already meets a broken pipe.
+#[test]
+fn inspect_into_a_closed_pipe_exits_quietly() {
+    let dir = shared("example-none");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+        .arg("inspect")
+        .arg(&dir)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+}
