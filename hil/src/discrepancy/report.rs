@@ -236,32 +236,13 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
         .enumerate()
         .map(|(s, sse)| (c.setting(s).1, (sse / norm).sqrt()))
         .collect();
-    let (y0, y1) = curve
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
-            (l.min(p.1), h.max(p.1))
-        });
-    Ok(Some(Figure {
-        title: format!("{}: balance error against {name}", c.name()),
-        x_desc: name.replace('_', " "),
-        y_desc: "NRMSE of the balance, all trials".into(),
-        series: vec![
-            Series {
-                label: "search".into(),
-                points: curve,
-                style: Style::Line,
-                rgb: (30, 90, 200),
-            },
-            Series {
-                label: format!("fit {name} = {}", sig(value)),
-                points: vec![(value, y0), (value, y1)],
-                style: Style::Bold,
-                rgb: (210, 50, 40),
-            },
-        ],
-        bars: Vec::new(),
-        hline: None,
-    }))
+    Ok(Some(search_figure(
+        format!("{}: balance error against {name}", c.name()),
+        "NRMSE of the balance, all trials",
+        name,
+        value,
+        curve,
+    )))
 }
 
 /// A held-out trial of fold 0 (a perturbed one if there is), y axis: measured motor
@@ -387,15 +368,33 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
         .map(|(s, sse)| (c.setting(s).1, (sse / norm).sqrt()))
         .collect();
     let (name, value) = c.setting(fit.setting);
+    search_figure(
+        format!("{}: hand balance error against {name}", c.name()),
+        "NRMSE of the hand balance, all perturbed trials",
+        name,
+        value,
+        curve,
+    )
+}
+
+/// The error of a search over a nonlinear parameter against its setting (`curve`), with
+/// the fitted `value` of `name` marked by a vertical bar over the curve's range.
+fn search_figure(
+    title: String,
+    y_desc: &str,
+    name: &str,
+    value: f64,
+    curve: Vec<(f64, f64)>,
+) -> Figure {
     let (y0, y1) = curve
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
             (l.min(p.1), h.max(p.1))
         });
     Figure {
-        title: format!("{}: hand balance error against {name}", c.name()),
+        title,
         x_desc: name.replace('_', " "),
-        y_desc: "NRMSE of the hand balance, all perturbed trials".into(),
+        y_desc: y_desc.into(),
         series: vec![
             Series {
                 label: "search".into(),
