@@ -29,7 +29,12 @@ use super::signals::BalanceSignals;
 
 /// A candidate plant effect: a family of linear least-squares problems, one per
 /// setting of its nonlinear parameter (pitch, delay, angle, smoothing velocity).
-pub trait Candidate: Sync + Send {
+///
+/// Every candidate is [`Designed`]: it writes each setting once as a [`Design`], and its
+/// Grams and residuals follow from that by default (ripple and rotation override
+/// `grams` with faster sums over the same rows). Outside this crate the trait is sealed:
+/// `Designed` cannot be named there.
+pub trait Candidate: Designed + Sync + Send {
     /// Catalog name (`rail-friction`, ...).
     fn name(&self) -> &'static str;
     /// Number of settings of the nonlinear parameter.
@@ -42,7 +47,9 @@ pub trait Candidate: Sync + Send {
     ///
     /// # Errors
     /// A signal-processing error while smoothing a regressor.
-    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError>;
+    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
+        design_grams(self, self.settings(), sig, latency_s)
+    }
     /// The catalog parameters (name with unit, value) from setting `s` and the fitted
     /// coefficients `beta` (masses first).
     fn parameters(&self, s: usize, beta: &[f64], latency_s: f64) -> Vec<(String, f64)>;
@@ -64,7 +71,9 @@ pub trait Candidate: Sync + Send {
         s: usize,
         beta: &[f64],
         latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError>;
+    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
+        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
+    }
 }
 
 /// `y − x·β` on the rows of both axes, with `x = [a·[axis = x], a·[axis = y], extra…]`.
@@ -132,7 +141,7 @@ pub fn push_rows(
 /// Grams and residuals follow from it, so that the fitted and the plotted balance
 /// cannot drift apart.
 #[derive(Debug, Clone)]
-pub(super) struct Design {
+pub struct Design {
     /// Target per axis, N.
     pub target: [Vec<f64>; 2],
     /// Normaliser per axis (the filtered command), N.
@@ -208,7 +217,7 @@ impl Design {
 }
 
 /// A candidate that writes each setting as a [`Design`].
-pub(super) trait Designed {
+pub trait Designed {
     /// Setting `s` at the nominal latency `latency_s`.
     ///
     /// # Errors
@@ -226,7 +235,7 @@ pub(super) trait Designed {
 /// # Errors
 /// As [`Designed::design`].
 pub(super) fn design_grams(
-    c: &impl Designed,
+    c: &(impl Designed + ?Sized),
     settings: usize,
     sig: &BalanceSignals,
     latency_s: f64,
@@ -264,9 +273,6 @@ impl Candidate for Baseline {
     fn columns(&self) -> usize {
         2
     }
-    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        design_grams(self, 1, sig, latency_s)
-    }
     fn parameters(&self, _s: usize, beta: &[f64], latency_s: f64) -> Vec<(String, f64)> {
         masses(beta)
             .into_iter()
@@ -282,15 +288,6 @@ impl Candidate for Baseline {
         _v: f64,
     ) -> Option<f64> {
         Some(0.0)
-    }
-    fn residual(
-        &self,
-        sig: &BalanceSignals,
-        s: usize,
-        beta: &[f64],
-        latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }
 

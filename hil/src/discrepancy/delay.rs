@@ -14,9 +14,8 @@
 //! filter passes little above ~30 Hz, where linear interpolation at 1 kHz is exact to
 //! 0.1 %.
 
-use super::candidate::{Candidate, Design, Designed, design_grams};
+use super::candidate::{Candidate, Design, Designed};
 use super::error::DiscrepancyError;
-use super::gram::Gram;
 use super::signals::BalanceSignals;
 
 /// Largest latency a nominal rig may have, s: one 4 kHz tick — the command computed at
@@ -87,19 +86,7 @@ impl Candidate for ActuationDelay {
     fn columns(&self) -> usize {
         2
     }
-    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        design_grams(self, self.settings(), sig, latency_s)
-    }
     fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![("delay_ms".to_string(), self.lag_s(s) * 1e3)]
-    }
-    fn residual(
-        &self,
-        sig: &BalanceSignals,
-        s: usize,
-        beta: &[f64],
-        latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

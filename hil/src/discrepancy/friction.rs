@@ -3,9 +3,8 @@
 //! `viscous_n_s_per_m`, `smooth_velocity_m_per_s`). `Fc` and `b` enter linearly; the
 //! smoothing velocity `v_s` is searched over a grid.
 
-use super::candidate::{Candidate, Design, Designed, design_grams};
+use super::candidate::{Candidate, Design, Designed};
 use super::error::DiscrepancyError;
-use super::gram::Gram;
 use super::signals::BalanceSignals;
 
 /// Smoothing velocities tried, m/s: from nearly a sign function to a soft knee at
@@ -57,9 +56,6 @@ impl Candidate for RailFriction {
     fn columns(&self) -> usize {
         4
     }
-    fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        design_grams(self, self.settings(), sig, latency_s)
-    }
     fn parameters(&self, s: usize, beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![
             (
@@ -76,14 +72,5 @@ impl Candidate for RailFriction {
     fn effect_force(&self, s: usize, beta: &[f64], _axis: usize, _q: f64, v: f64) -> Option<f64> {
         let vs = SMOOTH_VELOCITIES_M_PER_S.get(s)?;
         Some(-(beta.get(2)? * (v / vs).tanh() + beta.get(3)? * v))
-    }
-    fn residual(
-        &self,
-        sig: &BalanceSignals,
-        s: usize,
-        beta: &[f64],
-        latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
 }

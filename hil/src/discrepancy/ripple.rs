@@ -134,13 +134,4 @@ impl Candidate for ForceRipple {
         let ph = TAU * q / self.pitch_m(s);
         Some(-(bs * ph.sin() + bc * ph.cos()))
     }
-    fn residual(
-        &self,
-        sig: &BalanceSignals,
-        s: usize,
-        beta: &[f64],
-        latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
-    }
 }

@@ -115,13 +115,4 @@ impl Candidate for SensorRotation {
     fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![("angle_deg".to_string(), self.angle_deg(s))]
     }
-    fn residual(
-        &self,
-        sig: &BalanceSignals,
-        s: usize,
-        beta: &[f64],
-        latency_s: f64,
-    ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
-        Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
-    }
 }
