@@ -13,9 +13,11 @@
 //! Human side (hand balance, 32 trials of which 24 perturbed, repetitions of a pulse
 //! direction averaged): `grip-compliance` is found with gains of 62–83 % (seed 21: k
 //! 3972 N/m for 3871 hidden, gain 72 %). `handle-mass` is found with its mass within
-//! 20 % but explains only 17–35 % of the hand balance's residual, whose floor (NRMSE
-//! 0.08–0.23 with no effect) is the arm's motor noise (0.04 without it), so its test
-//! asserts 15 %: measured and open, like the delay's. `stretch-reflex` (15–35 ms,
+//! 20 % and, since the baseline's feedback velocity gain is tied to its position gain
+//! (`hil/src/discrepancy/hand.rs`), explains 19–53 % of the hand balance's residual
+//! (seed 1003: 0.80 kg for 0.73 hidden, gain 0.47), whose floor (NRMSE 0.08–0.16 with
+//! no effect) is the arm's motor noise (0.04 without it); its test asserts 40 %:
+//! measured and below the 50 %, like the delay's. `stretch-reflex` (15–35 ms,
 //! 100–250 N s/m) is not found: to first order a reflex is `g S Δv − g δ S Δa`, the
 //! free damping takes up the first term and only `g δ` is left, below the noise
 //! floor. Its test is ignored with that reason: open work, not a pass.
@@ -40,7 +42,7 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 
 fn check(effect: &str, seed: u64) {
     let min_gain = match effect {
-        "handle-mass" => 0.15,
+        "handle-mass" => 0.4,
         _ => 0.5,
     };
     let (g, d) = run(effect, seed);
