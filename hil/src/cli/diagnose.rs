@@ -44,7 +44,7 @@ pub struct Args {
     #[arg(long, default_value_t = 8)]
     pub folds: usize,
     /// Family-wise false-alarm level of the fold t-test.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.05)]
     pub alpha: f64,
     /// Smallest held-out gain that names a cause (fraction).
     #[arg(long, default_value_t = 0.10)]
