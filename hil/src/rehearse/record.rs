@@ -217,6 +217,27 @@ mod tests {
         assert_eq!(format!("{}", round_to(14.999_96, 1e-4)), "15");
     }
 
+    /// Blocks of 4 ticks: each row's activations are the mean of its ticks', like every other
+    /// channel (exact here: the sums of small integers are exact in f64), and a trailing
+    /// partial block is dropped.
+    #[test]
+    fn activations_are_block_means() {
+        let mut rec = Recorder::new(4, 10);
+        let zero = nalgebra::Vector2::zeros();
+        for k in 0..10 {
+            let a: [f64; MUSCLES] = std::array::from_fn(|m| (k * (m + 1)) as f64);
+            rec.push(&TickReport::default(), zero, zero, [0.0; 2], [0.0; 2], &a);
+        }
+        let rows = rec.finish();
+        assert_eq!(rows.len(), 2);
+        for (b, row) in rows.iter().enumerate() {
+            // Mean of k = 4b..4b+3 is 4b + 1.5; muscle m scales it by m + 1.
+            let mean_k = 4.0 * b as f64 + 1.5;
+            let want: [f64; MUSCLES] = std::array::from_fn(|m| mean_k * (m + 1) as f64);
+            assert_eq!(row.activations_n(), want);
+        }
+    }
+
     #[test]
     fn block_centre_clock() {
         // Blocks of 4 ticks: tick 1.5 is the centre of the first block, t = 0.
