@@ -3,7 +3,8 @@
 //! 1. `rigtwin rehearse --rerun save=`: the first 8 trials of the default reach-perturb
 //!    protocol (seed 1, 2 worker threads, as the command line runs them) rehearsed and
 //!    reported, against the same plus the whole rehearsal written to an `.rrd` file (every
-//!    sample, the ellipses, the events). The bound is a slowdown of at most 20 %;
+//!    sample, the muscle activations, the ellipses, the events), logged as the command line
+//!    does: each trial as it is written, overlapped with the simulation. The bound is a slowdown of at most 20 %;
 //!    both run in the same process, interleaved, and the ratio of their medians is printed.
 //! 2. A 32-trial 1 kHz session (the shared `example-friction` recording) read and logged to
 //!    an in-memory `.rrd`, against the same session only read.
@@ -15,17 +16,21 @@ use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, Options};
+use rigtwin::rehearse::{self, Options, RehearsalObserver};
 use rigtwin::report;
 use rigtwin::session::Session;
-use rigtwin::viz::{Target, Viewer, log_rehearsal, log_session, rehearsal_recording_id};
+use rigtwin::viz::{RehearsalLogger, Target, Viewer, log_session, rehearsal_recording_id};
 
 /// Trials of the reach-perturb schedule per rehearsal.
 const TRIALS: usize = 8;
 
+/// Interleaved pairs of runs (without, with `--rerun save=`) for the printed ratio.
+const PAIRS: usize = 7;
+
 /// What `rigtwin rehearse` does: rehearse, build and write the report; with `rrd`, also
-/// stream the rehearsal to that file. Returns the number of trials (0 on any error, which
-/// the assertion in `bench` turns into a failed run).
+/// stream the rehearsal to that file, each trial as it is written (overlapped with the
+/// simulation), the ellipses after the report. Returns the number of trials (0 on any error,
+/// which the assertion in `bench` turns into a failed run).
 fn rehearse_once(protocol: &Protocol, rrd: bool) -> usize {
     let Ok(tmp) = tempfile::tempdir() else {
         return 0;
@@ -38,7 +43,26 @@ fn rehearse_once(protocol: &Protocol, rrd: bool) -> usize {
         jobs: 2,
         max_trials: Some(TRIALS),
     };
-    let Ok(rehearsal) = rehearse::rehearse(protocol, &opts, &|_| {}, &AtomicBool::new(false))
+    let mut viewer = None;
+    if rrd {
+        let target = Target::Save(tmp.path().join("r.rrd"));
+        let Ok(id) = rehearsal_recording_id(protocol, &opts) else {
+            return 0;
+        };
+        let Ok(v) = Viewer::new(&target, "rigtwin", &id) else {
+            return 0;
+        };
+        viewer = Some(v);
+    }
+    let mut logger = viewer
+        .as_mut()
+        .map(|v| RehearsalLogger::new(v, protocol, opts.seed));
+    let observer: &mut dyn RehearsalObserver = match logger.as_mut() {
+        Some(l) => l,
+        None => &mut (),
+    };
+    let Ok(rehearsal) =
+        rehearse::rehearse_observed(protocol, &opts, &|_| {}, &AtomicBool::new(false), observer)
     else {
         return 0;
     };
@@ -46,17 +70,15 @@ fn rehearse_once(protocol: &Protocol, rrd: bool) -> usize {
     if report::write(&rep, &out).is_err() {
         return 0;
     }
-    if rrd {
-        let target = Target::Save(tmp.path().join("r.rrd"));
-        let Ok(id) = rehearsal_recording_id(&rehearsal) else {
-            return 0;
-        };
-        let Ok(mut viewer) = Viewer::new(&target, "rigtwin", &id) else {
-            return 0;
-        };
-        if log_rehearsal(&mut viewer, &rehearsal, &rep).is_err() || viewer.finish().is_err() {
-            return 0;
-        }
+    if let Some(logger) = logger
+        && logger.finish(&rehearsal, &rep).is_err()
+    {
+        return 0;
+    }
+    if let Some(viewer) = viewer
+        && viewer.finish().is_err()
+    {
+        return 0;
     }
     rehearsal.subjects.iter().map(|s| s.trials.len()).sum()
 }
@@ -94,13 +116,13 @@ fn bench_rehearse(c: &mut Criterion) {
     group.finish();
     // The ratio from interleaved runs, so that load from elsewhere hits both alike.
     let (mut plain, mut saved) = (Vec::new(), Vec::new());
-    for _ in 0..5 {
+    for _ in 0..PAIRS {
         plain.push(median_s(&protocol, false, 1));
         saved.push(median_s(&protocol, true, 1));
     }
     plain.sort_by(f64::total_cmp);
     saved.sort_by(f64::total_cmp);
-    let (p, s) = (plain[2], saved[2]);
+    let (p, s) = (plain[PAIRS / 2], saved[PAIRS / 2]);
     println!(
         "rehearse --rerun save= overhead: median {s:.3} s vs {p:.3} s without, ratio {:.3} (bound 1.20)",
         s / p

@@ -40,8 +40,9 @@ fn rigtwin(args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
-/// Runs `rigtwin rehearse <protocol> --max-trials <n> --out <dir>/<name> --rerun
-/// save=<dir>/<name>.rrd`; returns the rehearsal folder and the .rrd bytes.
+/// Runs `rigtwin rehearse <protocol> --max-trials <n> --jobs 2 --out <dir>/<name> --rerun
+/// save=<dir>/<name>.rrd`; returns the rehearsal folder and the .rrd bytes. Two workers, so
+/// that trials finish out of order and the logging must put them back in order.
 fn rehearse_saved(dir: &Path, protocol: &str, trials: usize, name: &str) -> (PathBuf, Vec<u8>) {
     let out = dir.join(name);
     let rrd = dir.join(format!("{name}.rrd"));
@@ -50,6 +51,8 @@ fn rehearse_saved(dir: &Path, protocol: &str, trials: usize, name: &str) -> (Pat
         protocol,
         "--max-trials",
         &trials.to_string(),
+        "--jobs",
+        "2",
         "--out",
         out.to_str().unwrap(),
         "--rerun",
@@ -150,6 +153,18 @@ fn assert_arrows_are_axes(arrows: &[[f32; 2]], m: [[f64; 2]; 2], scale: f64, wha
     }
 }
 
+/// The names of the lines of a series entity (its static `SeriesLines` row).
+fn series_names(chunks: &[Chunk], entity: &str) -> Vec<String> {
+    of(chunks, entity)
+        .filter(|c| c.is_static())
+        .flat_map(|c| {
+            c.iter_slices::<String>("SeriesLines:names".into())
+                .flat_map(|names| names.into_iter().map(|n| n.to_string()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
 fn csv_rows(session: &Path) -> usize {
     let session = Session::read(session).unwrap();
     session.trials.iter().map(|t| t.t_s.len()).sum()
@@ -183,6 +198,37 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
         assert_eq!(rows.len(), samples, "{entity}");
         assert!(rows.iter().all(|r| r.len() == 2), "{entity}: two lines");
     }
+    // The trials are logged from memory as they are written: the values are exactly the
+    // files' (each written value is the double its text parses to).
+    let session = Session::read(&session_dir).unwrap();
+    let from_files: Vec<Vec<f64>> = session
+        .trials
+        .iter()
+        .flat_map(|t| t.x_m.iter().zip(&t.y_m).map(|(x, y)| vec![*x, *y]))
+        .collect();
+    assert!(
+        scalar_rows(&chunks, paths::POSITION) == from_files,
+        "logged positions differ from the session files"
+    );
+
+    // The simulated arm's muscle activations: one entity, six named lines, every sample.
+    let activations = scalar_rows(&chunks, paths::MUSCLE_ACTIVATIONS_N);
+    assert_eq!(activations.len(), samples, "activation rows");
+    assert!(
+        activations.iter().all(|r| r.len() == 6),
+        "six muscles per row"
+    );
+    assert_eq!(
+        series_names(&chunks, paths::MUSCLE_ACTIVATIONS_N),
+        paths::MUSCLE_NAMES.map(str::to_owned).to_vec()
+    );
+    // Muscles only pull: the arm model clamps every activation at zero.
+    assert!(
+        activations
+            .iter()
+            .flatten()
+            .all(|a| *a >= 0.0 && a.is_finite())
+    );
 
     // The report's estimate and the arm's truth, as the report wrote them.
     let report: serde_json::Value =
@@ -241,10 +287,38 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
         1e-12,
         "K at the first onset",
     );
+    // The activations logged for that trial at its onset row equal the fresh simulation's
+    // (the same pure function of the plan; stored as f64, so within 1e-9 N means equal up
+    // to the last bits). The trial's rows start after those of the trials before it.
+    let first = session.trials[..perturbed[0].index as usize]
+        .iter()
+        .map(|t| t.len())
+        .sum::<usize>();
+    let rate = session.manifest.rate_hz;
+    let onset_row = (truth.tick as f64 * rate / 4000.0).floor() as usize;
+    for row in [onset_row, onset_row + 50] {
+        let fresh = sim.rows[row].activations_n();
+        let logged = &activations[first + row];
+        for (m, (a, b)) in logged.iter().zip(fresh).enumerate() {
+            assert!(
+                (a - b).abs() <= 1e-9,
+                "muscle {} at row {row}: logged {a} vs simulated {b}",
+                paths::MUSCLE_NAMES[m]
+            );
+        }
+    }
+    // Around the force pulse the feedback changes the activations: the check is not on a
+    // constant.
+    let before = &activations[first + onset_row];
+    let after = &activations[first + onset_row + 50];
+    assert!(
+        before.iter().zip(after).any(|(a, b)| (a - b).abs() > 1e-3),
+        "{before:?} vs {after:?}"
+    );
 
     assert!(temporal_rows(&chunks, paths::EVENTS) > REACH_TRIALS);
 
-    // Same protocol and seed, another folder: the same messages.
+    // Same protocol and seed, another folder, two workers again: the same messages.
     let (_, again) = rehearse_saved(dir.path(), "reach-perturb", REACH_TRIALS, "b");
     assert!(messages(&bytes) == messages(&again), "messages differ");
 }

@@ -129,14 +129,35 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         bar.set_message(format!("{:.0} s simulated", p.simulated_s));
     };
     let cancel = AtomicBool::new(false);
-    let rehearsal = rehearse::rehearse(&protocol, &options, &progress, &cancel)
+    // With --rerun, each trial is logged as soon as it is written, while the next ones are
+    // simulated; the ellipses follow the report.
+    #[cfg(feature = "rerun")]
+    let mut live = match &args.rerun.rerun {
+        Some(target) => Some(open_viewer(args, target, &protocol, &options)?),
+        None => None,
+    };
+    #[cfg(feature = "rerun")]
+    let mut logger = live
+        .as_mut()
+        .map(|(viewer, _, _)| rigtwin::viz::RehearsalLogger::new(viewer, &protocol, seed));
+    #[cfg(feature = "rerun")]
+    let observer: &mut dyn rehearse::RehearsalObserver = match logger.as_mut() {
+        Some(l) => l,
+        None => &mut (),
+    };
+    #[cfg(not(feature = "rerun"))]
+    let observer: &mut dyn rehearse::RehearsalObserver = &mut ();
+    let rehearsal = rehearse::rehearse_observed(&protocol, &options, &progress, &cancel, observer)
         .with_context(|| format!("rehearsing {} into {}", protocol.name, out_dir.display()))?;
     bar.finish_and_clear();
     let rep = report::build(&rehearsal);
     report::write(&rep, &out_dir)?;
     #[cfg(feature = "rerun")]
-    if let Some(target) = &args.rerun.rerun {
-        stream(args, target, &rehearsal, &rep)?;
+    if let Some(logger) = logger {
+        let logged = logger.finish(&rehearsal, &rep);
+        if let Some((viewer, target, id)) = live {
+            finish_viewer(args, viewer, &target, &id, logged)?;
+        }
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&rep)?);
@@ -151,28 +172,42 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Streams the rehearsal (its written sessions, safety events and ellipses) to `target`.
+/// Opens the viewer for a rehearsal; returns it with its target and recording id.
 #[cfg(feature = "rerun")]
-fn stream(
+fn open_viewer(
     args: &Args,
     target: &rigtwin::viz::Target,
-    rehearsal: &rehearse::Rehearsal,
-    rep: &report::Report,
-) -> anyhow::Result<()> {
-    use rigtwin::viz::{self, Target, Viewer};
-    let id = viz::rehearsal_recording_id(rehearsal)?;
+    protocol: &Protocol,
+    options: &Options,
+) -> anyhow::Result<(rigtwin::viz::Viewer, rigtwin::viz::Target, String)> {
+    use rigtwin::viz::{self, Viewer};
+    let id = viz::rehearsal_recording_id(protocol, options)?;
     let mut viewer =
         Viewer::new(target, "rigtwin", &id).with_context(|| format!("opening --rerun {target}"))?;
     viewer.set_live_rate_hz(args.live_rate_hz)?;
-    let logged = viz::log_rehearsal(&mut viewer, rehearsal, rep)
-        .with_context(|| format!("streaming the rehearsal to --rerun {target}"))?;
+    Ok((viewer, target.clone(), id))
+}
+
+/// Ends the stream (the `.rrd` footer, or the live viewer's last data) and says what was
+/// sent.
+#[cfg(feature = "rerun")]
+fn finish_viewer(
+    args: &Args,
+    viewer: rigtwin::viz::Viewer,
+    target: &rigtwin::viz::Target,
+    id: &str,
+    logged: Result<rigtwin::viz::RehearsalLogged, rigtwin::viz::VizError>,
+) -> anyhow::Result<()> {
+    use rigtwin::viz::Target;
+    let logged = logged.with_context(|| format!("streaming the rehearsal to --rerun {target}"))?;
     viewer
         .finish()
         .with_context(|| format!("finishing --rerun {target}"))?;
     let samples: usize = logged.sessions.iter().map(|s| s.samples).sum();
     let line = format!(
-        "viewer: {} sessions, {samples} samples, {} session estimates, {} onset truths, {} windows, {} safety events; recording {id}",
+        "viewer: {} sessions, {samples} samples ({} with muscle activations), {} session estimates, {} onset truths, {} windows, {} safety events; recording {id}",
         logged.sessions.len(),
+        logged.activation_samples,
         logged.borner,
         logged.onset_truths,
         logged.windows,

@@ -9,6 +9,12 @@
 //! `created` is fixed ([`CREATED`]) for the same reason; wall-clock times go to the
 //! report only.
 //!
+//! A [`RehearsalObserver`] passed to [`rehearse_observed`] sees each session start, each
+//! trial as soon as it is written (in trial order, with the table in memory and the
+//! simulated arm's muscle activations, which the session files do not hold) and each
+//! session end, on the writing thread while the workers simulate the next trials: the
+//! viewer logs the rehearsal that way, overlapped with the simulation.
+//!
 //! Layout of a rehearsal folder:
 //!
 //! ```text
@@ -30,12 +36,13 @@ use std::time::Instant;
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
+use rigtwin_arm::muscles::MUSCLES;
 use rigtwin_device::config::LawKind;
 
 use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
 use crate::session::{
     Amplitude, Device, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind, SessionError,
-    SessionWriter, SimInfo, Source, Subject, Trial, TrialKind, TrialMeta,
+    SessionWriter, SimInfo, Source, Subject, Trial, TrialEntry, TrialKind, TrialMeta,
 };
 use record::{Block, Layout, ch};
 pub use trial::{Extremes, OnsetTruth, TrialPlan, TrialTask};
@@ -196,6 +203,50 @@ pub struct Rehearsal {
     pub jobs: usize,
 }
 
+/// A trial just written, as a [`RehearsalObserver`] sees it: everything in memory.
+#[derive(Debug, Clone, Copy)]
+pub struct WrittenTrial<'a> {
+    /// The subject.
+    pub subject: &'a VirtualSubject,
+    /// 0-based position of the trial in its session.
+    pub index: usize,
+    /// Its entry in the manifest, as written (id, kind, targets, perturbation, digest).
+    pub entry: &'a TrialEntry,
+    /// The table, exactly as written to the trial file (every value is the double its text
+    /// parses to, so a reader of the file gets the same numbers).
+    pub table: &'a Trial,
+    /// The outcome (extremes, safety trip, ground truth at the onset).
+    pub result: &'a TrialResult,
+    /// The arm's six muscle activations per table row (N, in the order of
+    /// `rigtwin_arm::muscles::MUSCLE_NAMES`; block means like the table's rows), `None`
+    /// without an arm (the spring-mass rig). Not part of the session files.
+    pub activations_n: Option<&'a [[f64; MUSCLES]]>,
+}
+
+/// Sees a rehearsal as it is written, on the writing thread, in order: for each subject
+/// [`Self::session_started`], then [`Self::trial_written`] per trial in trial order, then
+/// [`Self::session_finished`]. The workers keep simulating meanwhile, so an observer that
+/// takes a while delays only the writing, not the simulation. Every method does nothing
+/// by default; `()` observes nothing.
+pub trait RehearsalObserver {
+    /// A subject's session is about to be written: its manifest (no trials yet).
+    fn session_started(&mut self, subject: &VirtualSubject, manifest: &Manifest) {
+        let _ = (subject, manifest);
+    }
+
+    /// A trial has been written.
+    fn trial_written(&mut self, trial: &WrittenTrial<'_>) {
+        let _ = trial;
+    }
+
+    /// The session is complete: `manifest` is the one written to `dir`, with every trial.
+    fn session_finished(&mut self, subject: &VirtualSubject, dir: &Path, manifest: &Manifest) {
+        let _ = (subject, dir, manifest);
+    }
+}
+
+impl RehearsalObserver for () {}
+
 /// The trials of one subject, in session order. Reach: `angles × repetitions`
 /// perturbed trials at random places among `trials`, angles in random order (000_*
 /// section 5.2), from the subject's schedule stream.
@@ -322,6 +373,7 @@ struct Done {
     meta: TrialMeta,
     table: Trial,
     result: TrialResult,
+    activations_n: Option<Vec<[f64; MUSCLES]>>,
     simulated_s: f64,
 }
 
@@ -341,6 +393,9 @@ fn run_trial(
         position_perturbation: protocol.kind != ProtocolKind::ReachPerturb,
     };
     let table = record::to_trial(&sim.rows, rate, layout);
+    let activations_n = sim
+        .muscles
+        .then(|| sim.rows.iter().map(Block::activations_n).collect());
     let t_est = protocol.estimate.t_est_s;
     let n_est = (t_est * rate).round() as usize + 1;
     let onset_s = sim.pulse_onset.map(|k| record::tick_time_s(k, div));
@@ -425,6 +480,7 @@ fn run_trial(
         meta,
         table,
         result,
+        activations_n,
         simulated_s,
     })
 }
@@ -508,6 +564,21 @@ pub fn rehearse(
     progress: &(dyn Fn(Progress) + Sync),
     cancel: &AtomicBool,
 ) -> Result<Rehearsal, RehearseError> {
+    rehearse_observed(protocol, options, progress, cancel, &mut ())
+}
+
+/// [`rehearse`], with `observer` shown each session and each trial as it is written
+/// (see [`RehearsalObserver`]).
+///
+/// # Errors
+/// [`RehearseError`] from the output folder, the models or the writer.
+pub fn rehearse_observed(
+    protocol: &Protocol,
+    options: &Options,
+    progress: &(dyn Fn(Progress) + Sync),
+    cancel: &AtomicBool,
+    observer: &mut dyn RehearsalObserver,
+) -> Result<Rehearsal, RehearseError> {
     let started = Instant::now();
     prepare_out(&options.out_dir)?;
     let jobs = options.jobs.max(1);
@@ -530,7 +601,9 @@ pub fn rehearse(
     let mut out = Vec::with_capacity(subjects.len());
     for (subject, plans) in subjects.iter().zip(&plans) {
         let dir = options.out_dir.join(&subject.id);
-        let mut writer = SessionWriter::create(&dir, manifest(protocol, subject, options.seed))?;
+        let manifest = manifest(protocol, subject, options.seed);
+        observer.session_started(subject, &manifest);
+        let mut writer = SessionWriter::create(&dir, manifest)?;
         let mut results = Vec::with_capacity(plans.len());
         let next = AtomicUsize::new(0);
         let (tx, rx) = mpsc::channel::<(usize, Result<Done, RehearseError>)>();
@@ -569,10 +642,19 @@ pub fn rehearse(
                         meta,
                         table,
                         mut result,
+                        activations_n,
                         simulated_s: s,
                     } = d;
                     let entry = writer.write_trial(meta, &table)?;
                     result.sha256 = entry.sha256.map(|h| h.to_string()).unwrap_or_default();
+                    observer.trial_written(&WrittenTrial {
+                        subject,
+                        index: want,
+                        entry,
+                        table: &table,
+                        result: &result,
+                        activations_n: activations_n.as_deref(),
+                    });
                     results.push(result);
                     want += 1;
                     done += 1;
@@ -590,7 +672,8 @@ pub fn rehearse(
             Ok(())
         });
         outcome?;
-        writer.finish()?;
+        let written = writer.finish()?;
+        observer.session_finished(subject, &dir, &written);
         out.push(SubjectResult {
             subject: subject.clone(),
             dir,

@@ -9,12 +9,13 @@
 //! resolve (0.1 µm, 0.1 mN, 1 µm/s, 1 mN of command) so that files stay small and
 //! their text is short; the simulator's ground-truth columns get the same rounding.
 
+use rigtwin_arm::muscles::MUSCLES;
 use rigtwin_device::TickReport;
 
 use crate::session::{Column, Trial};
 
-/// Number of channels in a [`Block`].
-pub const CHANNELS: usize = 24;
+/// Number of channels in a [`Block`]: twelve x/y pairs and the six muscle activations.
+pub const CHANNELS: usize = 24 + MUSCLES;
 
 /// Channel indices into [`Block::v`].
 pub mod ch {
@@ -42,6 +43,10 @@ pub mod ch {
     pub const PERT_POS: usize = 20;
     /// Virtual-spring anchor (imposed motion) x, y, m.
     pub const ANCHOR: usize = 22;
+    /// The arm's six muscle activations, N, in the order of
+    /// `rigtwin_arm::muscles::MUSCLE_NAMES` (zero without an arm). Kept in memory for the
+    /// viewer; never written to the session table.
+    pub const ACTIVATION: usize = 24;
 }
 
 /// One recorded row: the mean of each channel over its block of ticks.
@@ -56,6 +61,12 @@ impl Block {
     #[must_use]
     pub fn pair(&self, c: usize) -> [f64; 2] {
         [self.v[c], self.v[c + 1]]
+    }
+
+    /// The six muscle activations, N.
+    #[must_use]
+    pub fn activations_n(&self) -> [f64; MUSCLES] {
+        std::array::from_fn(|i| self.v[ch::ACTIVATION + i])
     }
 }
 
@@ -80,7 +91,9 @@ impl Recorder {
         }
     }
 
-    /// Adds one tick: the controller's report and the plant's truth.
+    /// Adds one tick: the controller's report, the plant's truth and the arm's muscle
+    /// activations (N; zeros without an arm). Allocation-free: the rows were reserved by
+    /// [`Recorder::new`].
     pub fn push(
         &mut self,
         r: &TickReport,
@@ -88,8 +101,9 @@ impl Recorder {
         true_vel: nalgebra::Vector2<f64>,
         hand_n: [f64; 2],
         acc: [f64; 2],
+        activations_n: &[f64; MUSCLES],
     ) {
-        let pairs: [[f64; 2]; CHANNELS / 2] = [
+        let pairs: [[f64; 2]; ch::ACTIVATION / 2] = [
             r.position_m,
             r.force_n,
             r.pert_force_n,
@@ -106,6 +120,9 @@ impl Recorder {
         for (i, p) in pairs.iter().enumerate() {
             self.sum[2 * i] += p[0];
             self.sum[2 * i + 1] += p[1];
+        }
+        for (s, a) in self.sum[ch::ACTIVATION..].iter_mut().zip(activations_n) {
+            *s += a;
         }
         self.count += 1;
         if self.count == self.div {
@@ -198,6 +215,27 @@ mod tests {
         assert_eq!(format!("{}", round_to(0.123_456_789, 1e-7)), "0.1234568");
         assert_eq!(format!("{}", round_to(-2.5e-9, 1e-7)), "0");
         assert_eq!(format!("{}", round_to(14.999_96, 1e-4)), "15");
+    }
+
+    /// Blocks of 4 ticks: each row's activations are the mean of its ticks', like every other
+    /// channel (exact here: the sums of small integers are exact in f64), and a trailing
+    /// partial block is dropped.
+    #[test]
+    fn activations_are_block_means() {
+        let mut rec = Recorder::new(4, 10);
+        let zero = nalgebra::Vector2::zeros();
+        for k in 0..10 {
+            let a: [f64; MUSCLES] = std::array::from_fn(|m| (k * (m + 1)) as f64);
+            rec.push(&TickReport::default(), zero, zero, [0.0; 2], [0.0; 2], &a);
+        }
+        let rows = rec.finish();
+        assert_eq!(rows.len(), 2);
+        for (b, row) in rows.iter().enumerate() {
+            // Mean of k = 4b..4b+3 is 4b + 1.5; muscle m scales it by m + 1.
+            let mean_k = 4.0 * b as f64 + 1.5;
+            let want: [f64; MUSCLES] = std::array::from_fn(|m| mean_k * (m + 1) as f64);
+            assert_eq!(row.activations_n(), want);
+        }
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //!                                       (recomputed on motor ticks, 2 kHz, held between)
 //!           human.update(n, joint state) neural update on its own divisor, muscle torques
 //!           rig.set_arm_torques, rig.step()   physics from n·h to (n+1)·h
-//!           recorder.push(n)            block means at the recording rate
+//!           recorder.push(n)            block means at the recording rate (the muscle
+//!                                       activations too, for the viewer)
 //! ```
 //!
 //! The controller is `rigtwin_device`'s, driven through `RigIo` exactly as on the rig.
@@ -16,6 +17,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rigtwin_arm::dynamics::JointState;
 use rigtwin_arm::human::{Admittance, HoldTask, ImposedSinusoid, ReachTask};
+use rigtwin_arm::muscles::MUSCLES;
 use rigtwin_arm::{Human, HumanConfig, Task};
 use rigtwin_device::config::Axis;
 use rigtwin_device::perturb::Crossing;
@@ -94,6 +96,9 @@ pub struct Extremes {
 pub struct Simulated {
     /// Block-mean rows at the recording rate.
     pub rows: Vec<Block>,
+    /// Whether a simulated arm held the handle, so that the rows' activation channels
+    /// (`record::ch::ACTIVATION`) hold its muscles' (false for the spring-mass rig).
+    pub muscles: bool,
     /// Extremes over all ticks.
     pub extremes: Extremes,
     /// Onset tick of the force pulse, if one fired.
@@ -221,6 +226,7 @@ pub fn simulate(
     let mut armed_angle_deg = 0.0;
     let mut last_hand_n = [0.0; 2];
     let mut last_acc = [0.0; 2];
+    let mut activations_n = [0.0; MUSCLES];
     let mut active = false;
     for n in 0..n_ticks {
         let now = Tick(n);
@@ -272,6 +278,7 @@ pub fn simulate(
         let state = rig.arm_state();
         if let (Some(h), Some(state)) = (human.as_mut(), state) {
             let tau = h.update(n, &state);
+            activations_n = h.activations_n();
             rig.set_arm_torques(tau)?;
             if let PerturbationStatus::Running { onset } = report.force_pulse
                 && onset == now
@@ -284,7 +291,14 @@ pub fn simulate(
         {
             pulse_onset = Some(n);
         }
-        recorder.push(&report, true_pos, true_vel, last_hand_n, last_acc);
+        recorder.push(
+            &report,
+            true_pos,
+            true_vel,
+            last_hand_n,
+            last_acc,
+            &activations_n,
+        );
         rig.step()?;
         let truth = rig.truth();
         last_hand_n = truth.hand_on_handle_n;
@@ -292,6 +306,7 @@ pub fn simulate(
     }
     Ok(Simulated {
         rows: recorder.finish(),
+        muscles: human.is_some(),
         extremes,
         pulse_onset,
         onset_truth,

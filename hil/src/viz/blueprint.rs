@@ -157,6 +157,7 @@ fn layout() -> Node {
                         ],
                     ),
                     series("Arm angles (deg)", "/plots/arm"),
+                    series("Muscle activations (N)", "/plots/muscles"),
                     series("Response (mm)", "/plots/response"),
                 ],
             ),

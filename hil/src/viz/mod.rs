@@ -54,7 +54,7 @@ pub use impedance::{
     log_session_estimates,
 };
 pub use overlay::{Overlaid, OverlayError, log_diagnosis_overlay, log_replay_overlay};
-pub use rehearsal::{RehearsalLogged, log_rehearsal, rehearsal_recording_id};
+pub use rehearsal::{RehearsalLogged, RehearsalLogger, rehearsal_recording_id};
 pub use session::{ARM_ANGLE_COLUMNS, Logged, log_session, log_session_at, recording_id};
 pub use target::{RerunArgs, Target, TargetParseError};
 pub use viewer::{DEFAULT_LIVE_RATE_HZ, Viewer};
@@ -127,6 +127,12 @@ pub enum VizError {
     /// Flushing a live stream failed.
     #[error("flushing the live stream: {0}")]
     Flush(String),
+    /// The protocol could not be serialised to derive a rehearsal's recording id.
+    #[error("describing the protocol for the recording id: {0}")]
+    ProtocolId(serde_json::Error),
+    /// A rehearsal's sessions and trials reached the logger out of order (a bug).
+    #[error("logging the rehearsal: {0}")]
+    Order(String),
     /// A session to be streamed did not read.
     #[error("reading the session to stream it: {0}")]
     Session(#[from] crate::session::SessionError),

@@ -21,6 +21,8 @@
 //! plots/reference         per sample  m, lines x and y (when recorded)
 //! plots/command           per sample  N, lines x and y (when recorded)
 //! plots/arm/angles_deg    per sample  degrees, lines shoulder and elbow
+//! plots/muscles/activations_n  per sample  N, six lines SF SE EF EE BF BE (rehearsals only:
+//!                                      the simulated arm's, not in the session files)
 //! plots/response/{x,y}_mm  per perturbed trial, 150 ms after onset, mm
 //! ellipses/<name>/outline  the image of the unit circle under the matrix (scaled)
 //! ellipses/<name>/axes     its principal semi-axes, labelled with the matrix
@@ -89,6 +91,13 @@ pub const COMMAND: &str = "plots/command";
 pub const ARM_ANGLES_DEG: &str = "plots/arm/angles_deg";
 /// Names of the two lines of [`ARM_ANGLES_DEG`], in the order of the scalars in each row.
 pub const ARM_ANGLE_NAMES: [&str; 2] = ["shoulder", "elbow"];
+/// Number of muscles of the simulated arm.
+pub const MUSCLES: usize = rigtwin_arm::muscles::MUSCLES;
+/// Muscle activations of a rehearsal's simulated arm, N (six lines, [`MUSCLE_NAMES`]).
+pub const MUSCLE_ACTIVATIONS_N: &str = "plots/muscles/activations_n";
+/// Names of the six lines of [`MUSCLE_ACTIVATIONS_N`], in the order of the scalars in each
+/// row: shoulder, elbow and biarticular flexor and extensor.
+pub const MUSCLE_NAMES: [&str; MUSCLES] = rigtwin_arm::muscles::MUSCLE_NAMES;
 
 /// Prefix of the measured channels in an overlay.
 pub const MEASURED: &str = "measured";

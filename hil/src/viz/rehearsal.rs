@@ -1,25 +1,36 @@
-//! A finished rehearsal in the viewer: every subject's written session (read back, so the
-//! viewer shows exactly what the files hold), its safety events, the estimator's ellipses
-//! next to the simulated arm's ground truth, all in one recording with the subjects back to
-//! back on the timelines.
+//! A rehearsal in the viewer, logged while it runs: a [`RehearsalLogger`] observes the
+//! rehearsal ([`crate::rehearse::rehearse_observed`]) and logs each trial from memory as soon
+//! as it is written, in trial order, on the writing thread while the workers simulate the
+//! next ones: the table exactly as written to the session (the same per-trial logging as a
+//! session read from disk), the simulated arm's muscle activations (which the session files
+//! do not hold), the trial's safety events and the arm's impedance at the force-pulse onset.
+//! After the report, [`RehearsalLogger::finish`] adds what needs the whole session: the
+//! estimator's ellipses next to the simulated arm's ground truth. The subjects are back to
+//! back on the timelines, in one recording.
 
 use sha2::{Digest as _, Sha256};
 
-use super::columns::TrialSpan;
+use super::columns::{Stamp, TrialSpan};
 use super::impedance::{self, Impedance, Which};
-use super::session::{Logged, log_session_at, recording_id};
+use super::session::{
+    Logged, log_session_end, log_session_start, log_session_trial, session_recording_id,
+};
 use super::{EventLevel, Viewer, VizError};
-use crate::protocol::ProtocolKind;
-use crate::rehearse::{Rehearsal, SubjectResult, TICK_HZ, record::tick_time_s};
+use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
+use crate::rehearse::{
+    Options, Rehearsal, RehearsalObserver, TICK_HZ, TrialResult, WrittenTrial, record::tick_time_s,
+};
 use crate::report::Report;
 use crate::report::estimate::piovesan_on_session;
-use crate::session::Session;
+use crate::session::{Manifest, Session};
 
-/// What [`log_rehearsal`] sent.
+/// What a [`RehearsalLogger`] sent.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RehearsalLogged {
     /// Per subject, in order: what its session sent.
     pub sessions: Vec<Logged>,
+    /// Samples with the arm's muscle activations, all subjects.
+    pub activation_samples: usize,
     /// Börner session estimates drawn.
     pub borner: usize,
     /// Ground-truth ellipses drawn at perturbation onsets.
@@ -30,136 +41,161 @@ pub struct RehearsalLogged {
     pub safety_events: usize,
 }
 
-/// The recording id of a rehearsal: protocol, seed and the first 16 hex digits of the
-/// SHA-256 of the subjects' own recording ids (each a digest of its `session.toml`), so the
-/// same protocol and seed give the same id.
-pub fn rehearsal_recording_id(rehearsal: &Rehearsal) -> Result<String, VizError> {
+/// The recording id of a rehearsal, known before it runs: protocol name, seed and the first
+/// 16 hex digits of the SHA-256 of the protocol as run (its JSON form, so a `--model` applied
+/// to it counts), the number of subjects and the trial limit. The same protocol and seed
+/// give the same id wherever the sessions are written.
+pub fn rehearsal_recording_id(protocol: &Protocol, options: &Options) -> Result<String, VizError> {
+    let json = serde_json::to_vec(protocol).map_err(VizError::ProtocolId)?;
     let mut hash = Sha256::new();
-    for s in &rehearsal.subjects {
-        let session = Session::open(&s.dir)?;
-        let path = s.dir.join(crate::session::MANIFEST_FILE);
-        let bytes = std::fs::read(&path).map_err(|source| VizError::Io { path, source })?;
-        hash.update(session.manifest().subject.id.as_bytes());
-        hash.update(Sha256::digest(&bytes));
-    }
+    hash.update(&json);
+    hash.update(options.subjects.to_le_bytes());
+    hash.update(
+        options
+            .max_trials
+            .map_or(u64::MAX, |m| m as u64)
+            .to_le_bytes(),
+    );
     let digest = hash.finalize();
     let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
-    Ok(format!(
-        "{}-seed{}-{hex}",
-        rehearsal.protocol.name, rehearsal.seed
-    ))
+    Ok(format!("{}-seed{}-{hex}", protocol.name, options.seed))
 }
 
-/// Logs a rehearsal: each subject's session as written ([`log_session_at`]), its trials'
-/// safety trips (error entries at the trip's tick), saturation and soft-wall contact
-/// (warnings at the trial's start), and the impedance: for reaches the report's Börner
-/// estimate of the subject with the arm's intrinsic impedance (mean over the onsets, as the
-/// report compares them) beside it at the start of the session, and the arm's impedance at
-/// each onset; for hold and calibration trials the windowed regression per window.
-pub fn log_rehearsal(
-    viewer: &mut Viewer,
-    rehearsal: &Rehearsal,
-    report: &Report,
-) -> Result<RehearsalLogged, VizError> {
-    let mut out = RehearsalLogged::default();
-    let mut first_trial = 0u32;
-    for subject in &rehearsal.subjects {
-        let session = Session::read(&subject.dir)?;
-        let logged = log_session_at(viewer, &session, first_trial)?;
-        first_trial = first_trial.saturating_add(u32::try_from(logged.trials).unwrap_or(u32::MAX));
-        let start = logged
+/// One subject's session as logged, kept for the ellipses at the end.
+#[derive(Debug)]
+struct SubjectLog {
+    id: String,
+    dir: std::path::PathBuf,
+    logged: Logged,
+    /// Hand positions at the force-pulse onsets, m.
+    onset_hands_m: Vec<[f64; 2]>,
+}
+
+impl SubjectLog {
+    /// The stamp of the session's start.
+    fn start(&self, viewer: &Viewer) -> Stamp {
+        self.logged
             .spans
             .first()
-            .map_or_else(|| viewer.stamp_at(0.0), |s| s.stamp(0.0));
-        viewer.log_event(
-            start,
-            EventLevel::Info,
-            // No folder in the text: the same protocol and seed give the same messages
-            // wherever the sessions were written.
-            &format!(
-                "rehearsal {} seed {}: subject {} (session {})",
-                rehearsal.protocol.name,
-                rehearsal.seed,
-                subject.subject.id,
-                recording_id(&session)?
-            ),
+            .map_or_else(|| viewer.stamp_at(0.0), |s| s.stamp(0.0))
+    }
+}
+
+/// Logs a rehearsal as it runs: pass it to [`crate::rehearse::rehearse_observed`], then call
+/// [`Self::finish`] with the report.
+///
+/// For each subject it logs the rig, then per trial (in trial order, whatever worker finished
+/// first, so the same protocol and seed give the same messages): the session's trial as
+/// written (series, overlays, arm), the arm's six muscle activations at every sample, the
+/// safety trip (an error entry at its tick), saturation and soft-wall contact (warnings at
+/// the trial's start) and, for a perturbed reach, the arm's intrinsic impedance at the
+/// onset; at the session's end its summary. A viewer error does not stop the rehearsal (the
+/// sessions are the record): logging stops and [`Self::finish`] returns the error.
+#[derive(Debug)]
+pub struct RehearsalLogger<'v> {
+    viewer: &'v mut Viewer,
+    protocol_name: String,
+    kind: ProtocolKind,
+    seed: u64,
+    /// Rate of the trial tables, Hz.
+    rate_hz: u32,
+    /// The session being written: its manifest (without trials) and what was logged.
+    current: Option<(Manifest, SubjectLog)>,
+    subjects: Vec<SubjectLog>,
+    next_trial: u32,
+    out: RehearsalLogged,
+    error: Option<VizError>,
+}
+
+impl<'v> RehearsalLogger<'v> {
+    /// A logger of a rehearsal of `protocol` with session seed `seed` into `viewer`.
+    pub fn new(viewer: &'v mut Viewer, protocol: &Protocol, seed: u64) -> Self {
+        Self {
+            viewer,
+            protocol_name: protocol.name.clone(),
+            kind: protocol.kind,
+            seed,
+            rate_hz: protocol.recording.rate_hz,
+            current: None,
+            subjects: Vec::new(),
+            next_trial: 0,
+            out: RehearsalLogged::default(),
+            error: None,
+        }
+    }
+
+    /// Runs `log` unless an earlier call failed; keeps the first error.
+    fn guarded(&mut self, log: impl FnOnce(&mut Self) -> Result<(), VizError>) {
+        if self.error.is_none()
+            && let Err(err) = log(self)
+        {
+            self.error = Some(err);
+        }
+    }
+
+    fn table_time_s(&self, tick: u64) -> f64 {
+        let div = TICK_HZ / u64::from(self.rate_hz.max(1));
+        tick_time_s(tick, div)
+    }
+
+    fn log_trial(&mut self, trial: &WrittenTrial<'_>) -> Result<(), VizError> {
+        let Some((manifest, subject)) = self.current.as_mut() else {
+            return Err(VizError::Order(format!(
+                "trial {} of {} arrived outside a session",
+                trial.entry.id, trial.subject.id
+            )));
+        };
+        let trial_index = self.next_trial;
+        self.next_trial = self.next_trial.saturating_add(1);
+        let span = log_session_trial(
+            self.viewer,
+            manifest,
+            trial_index,
+            trial.entry,
+            trial.table,
+            &mut subject.logged,
         )?;
-        out.safety_events += log_safety(viewer, rehearsal, subject, &logged.spans)?;
-        match rehearsal.protocol.kind {
-            ProtocolKind::ReachPerturb => {
-                let (truths, drawn) = log_onset_truths(viewer, rehearsal, subject, &logged.spans)?;
-                out.onset_truths += drawn;
-                let estimate = report
-                    .estimates
-                    .iter()
-                    .find(|e| e.subject == subject.subject.id);
-                match estimate {
-                    Some(e) => match &e.estimate {
-                        Some(est) => {
-                            let truth = Impedance {
-                                stiffness_n_per_m: e.truth_k_n_per_m,
-                                damping_n_s_per_m: e.truth_d_ns_per_m,
-                            };
-                            let hand = impedance::mean_point(truths);
-                            impedance::log_borner(viewer, start, hand, est, Some(&truth))?;
-                            out.borner += 1;
-                        }
-                        None => viewer.log_event(
-                            start,
-                            EventLevel::Warn,
-                            &format!(
-                                "no Börner estimate for {}: {}",
-                                subject.subject.id,
-                                e.error.as_deref().unwrap_or("no perturbed trial")
-                            ),
-                        )?,
-                    },
-                    None => viewer.log_event(
-                        start,
-                        EventLevel::Warn,
-                        &format!("no Börner estimate for {}", subject.subject.id),
-                    )?,
-                }
-            }
-            ProtocolKind::HoldSinusoid | ProtocolKind::CalibrationRig => {
-                let m_hat_kg = (rehearsal.protocol.kind == ProtocolKind::CalibrationRig)
-                    .then(|| rehearsal.protocol.calibration().mass_kg);
-                match piovesan_on_session(&session, m_hat_kg) {
-                    Ok(trials) => {
-                        out.windows +=
-                            impedance::log_piovesan(viewer, &session, &logged.spans, &trials)?;
-                    }
-                    Err(e) => viewer.log_event(
-                        start,
-                        EventLevel::Warn,
-                        &format!("no windowed estimate for {}: {e}", subject.subject.id),
-                    )?,
-                }
+        if let Some(activations) = trial.activations_n {
+            self.viewer
+                .log_activations(&span, &trial.table.t_s, activations)?;
+            self.out.activation_samples += activations.len();
+        }
+        let id = subject.id.clone();
+        self.out.safety_events += self.log_safety(&id, trial.result, &span)?;
+        if let Some(truth) = &trial.result.onset_truth {
+            let imp = Impedance {
+                stiffness_n_per_m: truth.stiffness_n_per_m,
+                damping_n_s_per_m: truth.damping_n_s_per_m,
+            };
+            let at = span.stamp(self.table_time_s(truth.tick));
+            impedance::log_impedance(
+                self.viewer,
+                Which::TruthAtOnset,
+                at,
+                truth.hand_m,
+                &imp,
+                &format!("trial {}", trial.result.id),
+            )?;
+            self.out.onset_truths += 1;
+            if let Some((_, s)) = self.current.as_mut() {
+                s.onset_hands_m.push(truth.hand_m);
             }
         }
-        out.sessions.push(logged);
+        Ok(())
     }
-    Ok(out)
-}
 
-fn table_time_s(rehearsal: &Rehearsal, tick: u64) -> f64 {
-    let div = TICK_HZ / u64::from(rehearsal.protocol.recording.rate_hz.max(1));
-    tick_time_s(tick, div)
-}
-
-fn log_safety(
-    viewer: &mut Viewer,
-    rehearsal: &Rehearsal,
-    subject: &SubjectResult,
-    spans: &[TrialSpan],
-) -> Result<usize, VizError> {
-    let mut n = 0;
-    for (trial, span) in subject.trials.iter().zip(spans) {
+    fn log_safety(
+        &mut self,
+        subject: &str,
+        trial: &TrialResult,
+        span: &TrialSpan,
+    ) -> Result<usize, VizError> {
+        let mut n = 0;
         let e = &trial.extremes;
-        let who = format!("{} trial {}", subject.subject.id, trial.id);
+        let who = format!("{subject} trial {}", trial.id);
         if let Some((tick, why)) = &e.trip {
-            let at = span.stamp(table_time_s(rehearsal, *tick));
-            viewer.log_event(
+            let at = span.stamp(self.table_time_s(*tick));
+            self.viewer.log_event(
                 at,
                 EventLevel::Error,
                 &format!("{who}: safety trip at tick {tick}: {why}"),
@@ -167,7 +203,7 @@ fn log_safety(
             n += 1;
         }
         if e.saturated_ticks > 0 {
-            viewer.log_event(
+            self.viewer.log_event(
                 span.stamp(0.0),
                 EventLevel::Warn,
                 &format!(
@@ -178,7 +214,7 @@ fn log_safety(
             n += 1;
         }
         if e.wall_ticks > 0 {
-            viewer.log_event(
+            self.viewer.log_event(
                 span.stamp(0.0),
                 EventLevel::Warn,
                 &format!(
@@ -188,38 +224,156 @@ fn log_safety(
             )?;
             n += 1;
         }
+        Ok(n)
     }
-    Ok(n)
+
+    fn end_session(&mut self, dir: &std::path::Path, manifest: &Manifest) -> Result<(), VizError> {
+        let Some((_, subject)) = self.current.take() else {
+            return Err(VizError::Order(format!(
+                "the session in {} ended without starting",
+                dir.display()
+            )));
+        };
+        log_session_end(self.viewer, manifest, &subject.logged)?;
+        let start = subject.start(self.viewer);
+        // No folder in the text: the same protocol and seed give the same messages wherever
+        // the sessions were written.
+        let text = format!(
+            "rehearsal {} seed {}: subject {} (session {})",
+            self.protocol_name,
+            self.seed,
+            subject.id,
+            session_recording_id(dir, &manifest.subject.id)?
+        );
+        self.viewer.log_event(start, EventLevel::Info, &text)?;
+        self.subjects.push(SubjectLog {
+            dir: dir.to_path_buf(),
+            ..subject
+        });
+        Ok(())
+    }
+
+    /// Ends the logging once the report is built: for reaches the report's Börner estimate
+    /// of each subject with the arm's intrinsic impedance (mean over the onsets, as the
+    /// report compares them) beside it, at the mean onset hand position and the start of the
+    /// session; for hold and calibration trials the windowed regression per window (computed
+    /// from the session read back, as `rigtwin estimate` does). Returns what was sent, or
+    /// the first error met while logging.
+    pub fn finish(
+        mut self,
+        rehearsal: &Rehearsal,
+        report: &Report,
+    ) -> Result<RehearsalLogged, VizError> {
+        if let Some(err) = self.error.take() {
+            return Err(err);
+        }
+        if self.current.is_some() {
+            return Err(VizError::Order(
+                "the rehearsal ended in the middle of a session".to_owned(),
+            ));
+        }
+        let subjects = std::mem::take(&mut self.subjects);
+        for subject in &subjects {
+            let start = subject.start(self.viewer);
+            match self.kind {
+                ProtocolKind::ReachPerturb => self.log_borner(subject, start, report)?,
+                ProtocolKind::HoldSinusoid | ProtocolKind::CalibrationRig => {
+                    self.log_windows(subject, start, rehearsal)?;
+                }
+            }
+        }
+        self.out.sessions = subjects.into_iter().map(|s| s.logged).collect();
+        Ok(self.out)
+    }
+
+    fn log_borner(
+        &mut self,
+        subject: &SubjectLog,
+        start: Stamp,
+        report: &Report,
+    ) -> Result<(), VizError> {
+        let estimate = report.estimates.iter().find(|e| e.subject == subject.id);
+        match estimate {
+            Some(e) => match &e.estimate {
+                Some(est) => {
+                    let truth = Impedance {
+                        stiffness_n_per_m: e.truth_k_n_per_m,
+                        damping_n_s_per_m: e.truth_d_ns_per_m,
+                    };
+                    let hand = impedance::mean_point(subject.onset_hands_m.iter().copied());
+                    impedance::log_borner(self.viewer, start, hand, est, Some(&truth))?;
+                    self.out.borner += 1;
+                    Ok(())
+                }
+                None => self.viewer.log_event(
+                    start,
+                    EventLevel::Warn,
+                    &format!(
+                        "no Börner estimate for {}: {}",
+                        subject.id,
+                        e.error.as_deref().unwrap_or("no perturbed trial")
+                    ),
+                ),
+            },
+            None => self.viewer.log_event(
+                start,
+                EventLevel::Warn,
+                &format!("no Börner estimate for {}", subject.id),
+            ),
+        }
+    }
+
+    fn log_windows(
+        &mut self,
+        subject: &SubjectLog,
+        start: Stamp,
+        rehearsal: &Rehearsal,
+    ) -> Result<(), VizError> {
+        let session = Session::read(&subject.dir)?;
+        let m_hat_kg = (rehearsal.protocol.kind == ProtocolKind::CalibrationRig)
+            .then(|| rehearsal.protocol.calibration().mass_kg);
+        match piovesan_on_session(&session, m_hat_kg) {
+            Ok(trials) => {
+                self.out.windows +=
+                    impedance::log_piovesan(self.viewer, &session, &subject.logged.spans, &trials)?;
+                Ok(())
+            }
+            Err(e) => self.viewer.log_event(
+                start,
+                EventLevel::Warn,
+                &format!("no windowed estimate for {}: {e}", subject.id),
+            ),
+        }
+    }
 }
 
-/// The arm's intrinsic impedance at each force-pulse onset, at the hand there; returns the
-/// hand positions and the number drawn.
-fn log_onset_truths(
-    viewer: &mut Viewer,
-    rehearsal: &Rehearsal,
-    subject: &SubjectResult,
-    spans: &[TrialSpan],
-) -> Result<(Vec<[f64; 2]>, usize), VizError> {
-    let mut hands = Vec::new();
-    for (trial, span) in subject.trials.iter().zip(spans) {
-        let Some(truth) = &trial.onset_truth else {
-            continue;
-        };
-        let imp = Impedance {
-            stiffness_n_per_m: truth.stiffness_n_per_m,
-            damping_n_s_per_m: truth.damping_n_s_per_m,
-        };
-        let at = span.stamp(table_time_s(rehearsal, truth.tick));
-        impedance::log_impedance(
-            viewer,
-            Which::TruthAtOnset,
-            at,
-            truth.hand_m,
-            &imp,
-            &format!("trial {}", trial.id),
-        )?;
-        hands.push(truth.hand_m);
+impl RehearsalObserver for RehearsalLogger<'_> {
+    fn session_started(&mut self, subject: &VirtualSubject, manifest: &Manifest) {
+        self.guarded(|me| {
+            log_session_start(me.viewer, manifest)?;
+            me.current = Some((
+                manifest.clone(),
+                SubjectLog {
+                    id: subject.id.clone(),
+                    dir: std::path::PathBuf::new(),
+                    logged: Logged::default(),
+                    onset_hands_m: Vec::new(),
+                },
+            ));
+            Ok(())
+        });
     }
-    let n = hands.len();
-    Ok((hands, n))
+
+    fn trial_written(&mut self, trial: &WrittenTrial<'_>) {
+        self.guarded(|me| me.log_trial(trial));
+    }
+
+    fn session_finished(
+        &mut self,
+        _subject: &VirtualSubject,
+        dir: &std::path::Path,
+        manifest: &Manifest,
+    ) {
+        self.guarded(|me| me.end_session(dir, manifest));
+    }
 }

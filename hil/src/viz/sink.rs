@@ -160,7 +160,15 @@ fn encoder<W: std::io::Write>(write: W) -> Result<Encoder<W>, VizError> {
 }
 
 impl Sink {
+    /// Creates the file (and its folder, as `--out` is created: a rehearsal opens its
+    /// `.rrd` before it writes its sessions).
     pub(crate) fn file(path: PathBuf) -> Result<Self, VizError> {
+        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            std::fs::create_dir_all(parent).map_err(|source| VizError::Io {
+                path: parent.to_path_buf(),
+                source,
+            })?;
+        }
         let file = File::create(&path).map_err(|source| VizError::Io {
             path: path.clone(),
             source,

@@ -104,6 +104,17 @@ const XY_RGB: [[u8; 3]; 2] = [[230, 85, 60], [50, 120, 220]];
 /// Colours of the shoulder and elbow angles.
 const ARM_ANGLES_RGB: [[u8; 3]; 2] = [[120, 90, 200], [60, 170, 120]];
 
+/// Colours of the six muscles: each antagonist pair (flexor, extensor) one hue, the
+/// flexor darker.
+const MUSCLE_RGB: [[u8; 3]; paths::MUSCLES] = [
+    [200, 60, 40],
+    [240, 150, 120],
+    [40, 90, 200],
+    [130, 170, 240],
+    [40, 150, 70],
+    [130, 210, 140],
+];
+
 fn positive(what: &'static str, value: f64) -> Result<f64, VizError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
@@ -494,6 +505,44 @@ impl Viewer {
             ARM_ANGLES_RGB,
             &times,
             angles_deg,
+        )
+    }
+
+    /// Logs the arm's six muscle activations over a trial (N, one row of six per sample, in
+    /// the order of [`paths::MUSCLE_NAMES`]) as one entity with six named lines,
+    /// [`paths::MUSCLE_ACTIVATIONS_N`]. `t_s` is the trial's time column (the one given to
+    /// [`Self::log_trial`]); a live viewer gets them thinned like the trial's series.
+    pub fn log_activations(
+        &mut self,
+        span: &TrialSpan,
+        t_s: &[f64],
+        activations_n: &[[f64; paths::MUSCLES]],
+    ) -> Result<(), VizError> {
+        if activations_n.len() != t_s.len() {
+            return Err(VizError::ColumnLength {
+                column: "activations_n",
+                len: activations_n.len(),
+                expected: t_s.len(),
+            });
+        }
+        let n = t_s.len();
+        if n == 0 {
+            return Ok(());
+        }
+        let rate_hz = if span.duration_s > 0.0 {
+            n as f64 / span.duration_s
+        } else {
+            1.0
+        };
+        let picks: Vec<usize> = (0..n).step_by(self.stride(rate_hz)).collect();
+        let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
+        let times = Times::of(&stamps);
+        self.send_series(
+            paths::MUSCLE_ACTIVATIONS_N,
+            paths::MUSCLE_NAMES,
+            MUSCLE_RGB,
+            &times,
+            picks.iter().flat_map(|&i| activations_n[i]),
         )
     }
 
