@@ -172,6 +172,24 @@ impl Viewer {
     }
 
     /// Every how many samples one is sent, at this sampling rate.
+    /// The rows of a trial a series sends (every row, or thinned to the live rate) and their
+    /// times; `None` for an empty trial.
+    fn picks(&self, span: &TrialSpan, t_s: &[f64]) -> Option<(Vec<usize>, Times)> {
+        let n = t_s.len();
+        if n == 0 {
+            return None;
+        }
+        let rate_hz = if span.duration_s > 0.0 {
+            n as f64 / span.duration_s
+        } else {
+            1.0
+        };
+        let picks: Vec<usize> = (0..n).step_by(self.stride(rate_hz)).collect();
+        let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
+        let times = Times::of(&stamps);
+        Some((picks, times))
+    }
+
     fn stride(&self, rate_hz: f64) -> usize {
         if self.sink.is_live() && rate_hz > self.live_rate_hz {
             (rate_hz / self.live_rate_hz).floor().max(1.0) as usize
@@ -439,18 +457,9 @@ impl Viewer {
         if !self.shoulder_logged {
             self.log_shoulder(arm.shoulder_m)?;
         }
-        let n = t_s.len();
-        if n == 0 {
+        let Some((picks, times)) = self.picks(span, t_s) else {
             return Ok(());
-        }
-        let rate_hz = if span.duration_s > 0.0 {
-            n as f64 / span.duration_s
-        } else {
-            1.0
         };
-        let picks: Vec<usize> = (0..n).step_by(self.stride(rate_hz)).collect();
-        let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
-        let times = Times::of(&stamps);
         let s = arm.shoulder_m;
         let links: Vec<[[f32; 2]; 3]> = picks
             .iter()
@@ -525,18 +534,9 @@ impl Viewer {
                 expected: t_s.len(),
             });
         }
-        let n = t_s.len();
-        if n == 0 {
+        let Some((picks, times)) = self.picks(span, t_s) else {
             return Ok(());
-        }
-        let rate_hz = if span.duration_s > 0.0 {
-            n as f64 / span.duration_s
-        } else {
-            1.0
         };
-        let picks: Vec<usize> = (0..n).step_by(self.stride(rate_hz)).collect();
-        let stamps: Vec<Stamp> = picks.iter().map(|&i| span.stamp(t_s[i])).collect();
-        let times = Times::of(&stamps);
         self.send_series(
             paths::MUSCLE_ACTIVATIONS_N,
             paths::MUSCLE_NAMES,
