@@ -222,7 +222,7 @@ pub fn balance_filter(window: usize, dt_s: f64) -> Result<Vec<f64>, SignalError>
 /// `x` through the symmetric FIR `taps` (odd length), centred; samples beyond the ends
 /// are the end samples (only the half window at each end, outside the evaluated rows,
 /// sees them).
-fn fir_clamped(taps: &[f64], x: &[f64]) -> Result<Vec<f64>, SignalError> {
+pub fn fir_clamped(taps: &[f64], x: &[f64]) -> Result<Vec<f64>, SignalError> {
     if let Some((index, value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SignalError::NonFinite {
             index,
