@@ -39,7 +39,7 @@ use rigtwin_device::signal::{EdgeMode, savgol_filter};
 
 use super::error::DiscrepancyError;
 use super::signals::{
-    EVALUATION_RATE_HZ, SMOOTHING_ORDER, balance_filter, fir_clamped, window_for_rate,
+    EVALUATION_RATE_HZ, SMOOTHING_ORDER, filter_force, trial_balance_filter, window_for_rate,
 };
 use crate::session::{Session, Trial, TrialEntry};
 
@@ -238,16 +238,8 @@ fn smooth(
             }
         })
     };
-    let taps = balance_filter(window, dt).map_err(|source| DiscrepancyError::Signal {
-        trial: entry.id,
-        source,
-    })?;
-    let force = |x: &[f64]| {
-        fir_clamped(&taps, x).map_err(|source| DiscrepancyError::Signal {
-            trial: entry.id,
-            source,
-        })
-    };
+    let taps = trial_balance_filter(window, dt, entry.id)?;
+    let force = |x: &[f64]| filter_force(&taps, x, entry.id);
     let [ax, ay] = [sg(&trial.x_m, 2)?, sg(&trial.y_m, 2)?];
     let hand = |f: Vec<f64>, a: &[f64]| -> Vec<f64> {
         f.iter()

@@ -114,16 +114,8 @@ impl BalanceSignals {
                 },
             )
         };
-        let taps = balance_filter(window, dt).map_err(|source| DiscrepancyError::Signal {
-            trial: entry.id,
-            source,
-        })?;
-        let force = |x: &[f64]| {
-            fir_clamped(&taps, x).map_err(|source| DiscrepancyError::Signal {
-                trial: entry.id,
-                source,
-            })
-        };
+        let taps = trial_balance_filter(window, dt, entry.id)?;
+        let force = |x: &[f64]| filter_force(&taps, x, entry.id);
         let decim = ((rate_hz / EVALUATION_RATE_HZ).round() as usize).max(1);
         let half = window / 2;
         let rows = (half..n - half).step_by(decim).collect();
@@ -149,10 +141,7 @@ impl BalanceSignals {
     /// # Errors
     /// A signal-processing error (a non-finite value in `x`).
     pub fn smooth(&self, x: &[f64]) -> Result<Vec<f64>, DiscrepancyError> {
-        fir_clamped(&self.force_taps, x).map_err(|source| DiscrepancyError::Signal {
-            trial: self.id,
-            source,
-        })
+        filter_force(&self.force_taps, x, self.id)
     }
 
     /// The motor command of `axis` delayed by `delay_s` (`u(t − delay)`), at the
@@ -219,10 +208,30 @@ pub fn balance_filter(window: usize, dt_s: f64) -> Result<Vec<f64>, SignalError>
     Ok(h)
 }
 
+/// [`balance_filter`] for trial `trial`'s window and spacing; an error names the trial.
+///
+/// # Errors
+/// A window or spacing that the Savitzky–Golay design refuses.
+pub fn trial_balance_filter(
+    window: usize,
+    dt_s: f64,
+    trial: u32,
+) -> Result<Vec<f64>, DiscrepancyError> {
+    balance_filter(window, dt_s).map_err(|source| DiscrepancyError::Signal { trial, source })
+}
+
+/// A force column of trial `trial` through the balance filter `taps`.
+///
+/// # Errors
+/// A non-finite value in `x`, naming the trial and the sample.
+pub fn filter_force(taps: &[f64], x: &[f64], trial: u32) -> Result<Vec<f64>, DiscrepancyError> {
+    fir_clamped(taps, x).map_err(|source| DiscrepancyError::Signal { trial, source })
+}
+
 /// `x` through the symmetric FIR `taps` (odd length), centred; samples beyond the ends
 /// are the end samples (only the half window at each end, outside the evaluated rows,
 /// sees them).
-pub fn fir_clamped(taps: &[f64], x: &[f64]) -> Result<Vec<f64>, SignalError> {
+fn fir_clamped(taps: &[f64], x: &[f64]) -> Result<Vec<f64>, SignalError> {
     if let Some((index, value)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {
         return Err(SignalError::NonFinite {
             index,
