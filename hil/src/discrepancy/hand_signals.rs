@@ -35,7 +35,7 @@ use rigtwin_arm::dynamics::mass_matrix;
 use rigtwin_arm::kinematics::{Elbow, inverse, jacobian};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
 use rigtwin_arm::params::ArmParams;
-use rigtwin_device::signal::{EdgeMode, savgol_filter};
+use rigtwin_device::signal::{EdgeMode, gradient, savgol_filter};
 
 use super::error::DiscrepancyError;
 use super::signals::{
@@ -252,16 +252,7 @@ fn smooth(
     // The rate of the filtered hand force by central differences: the filter passes
     // little above 30 Hz, where the difference is within 0.6 % of the derivative, and the
     // rate is then the one of the very signal the balance uses.
-    let rate = |f: &[f64]| -> Vec<f64> {
-        let n = f.len();
-        (0..n)
-            .map(|k| {
-                let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
-                (f[hi] - f[lo]) / ((hi - lo) as f64 * dt)
-            })
-            .collect()
-    };
-    let (fdx, fdy) = (rate(&fx), rate(&fy));
+    let (fdx, fdy) = (gradient(&fx, dt), gradient(&fy, dt));
     Ok(Smoothed {
         y_raw: trial.y_m.clone(),
         ch: [
