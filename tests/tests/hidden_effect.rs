@@ -10,22 +10,22 @@
 //! `discrepancy/signals.rs` (gain 0.65 at seed 14; 7 of 10 sweep seeds with a 1–1.5 ms
 //! delay at ≥ 50 %, the rest 0.22–0.44, see `tests/tests/hidden_delay.rs`).
 //!
-//! Human side (hand balance, 32 trials of which 24 perturbed, repetitions of a pulse
-//! direction averaged): `grip-compliance` is found with gains of 62–83 % (seed 21: k
-//! 3972 N/m for 3871 hidden, gain 72 %). `handle-mass` is found with its mass within
-//! 20 % (the feedback velocity gain tied to the position gain in the baseline, the forces
-//! through the balance filter: `hil/src/discrepancy/hand.rs`, `hand_signals.rs`) and
-//! explains 11–45 % of the hand balance's residual (seed 1003: 0.726 kg for 0.725
-//! hidden, gain 0.45), whose floor (NRMSE 0.08–0.16 with no effect) is the arm's motor
-//! noise (0.053 without it, generator seeds 1–5 with activation CV 0, where the mass
-//! explains 57–76 %); its test asserts 40 %: measured and below the 50 %, like
-//! the delay's. `stretch-reflex` (15–35 ms, 100–250 N s/m) is named in 5 of 20 sweep
-//! sessions, always with the delay at 10–11 ms and about twice the gain: to first order
-//! a reflex is `g S Δv − g δ S Δa`, the free damping takes up the first term and only
-//! `g δ` is left, near the floor. Its test is ignored: open work, not a pass.
+//! Human side (hand balance, 32 trials of which 24 perturbed at 4 pairs of opposite
+//! directions; fitted on the odd parts of each pair's mean responses, tested on the 12
+//! repetitions, `hil/src/discrepancy/hand.rs`): `grip-compliance` is found with gains
+//! of 63–92 % (seed 21: k within 20 %). `handle-mass` is found with its mass within
+//! 20 % and explains 19–78 % of the hand balance's residual, median 52 %, at least half
+//! on 11 of 20 sweep seeds (seed 1003: 0.738 kg for 0.725 hidden, gain 0.66); the floor
+//! is the arm's motor noise (hand baseline NRMSE 0.04–0.15 with no effect).
+//! `stretch-reflex` (15–35 ms, 100–250 N s/m) is named in 10 of 20 sweep sessions,
+//! never misnamed, with gains of 11–38 %: to first order a reflex is
+//! `g S Δv − g δ S Δa`, the free damping takes up the first term, and what tells the
+//! delay from the gain is weak (see `hand.rs`): 4 of the 10 come out at the delay grid's
+//! 10 ms edge, 2 of 20 have both parameters within 20 %. Its test is ignored: open
+//! work, not a pass.
 //! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README): none 20/20
 //! none; plant side 20/20 named each; grip 20/20; handle mass 20/20 named, 20/20
-//! within 20 %; reflex 5/20 named (0/20 parameters within 20 %), 15 none.
+//! within 20 %; reflex 10/20 named (2/20 parameters within 20 %), 10 none.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose};
@@ -44,10 +44,7 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 }
 
 fn check(effect: &str, seed: u64) {
-    let min_gain = match effect {
-        "handle-mass" => 0.4,
-        _ => 0.5,
-    };
+    let min_gain = 0.5;
     let (g, d) = run(effect, seed);
     eprintln!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
     eprintln!("found  {} {:?} gain {:?}", d.cause, d.parameters, d.gain);
@@ -112,7 +109,7 @@ fn hidden_handle_mass_is_found() {
 }
 
 #[test]
-#[ignore = "open: on the reach-and-pulse protocol only the product of a reflex's gain and delay rises above the hand balance's floor (5/20 named in the sweep, delay never within 20 %)"]
+#[ignore = "open: on the reach-and-pulse protocol a reflex is named in 10/20 sweep sessions, with held-out gains of 11-38 % and both parameters within 20 % in 2/20"]
 fn hidden_stretch_reflex_is_found() {
     check("stretch-reflex", 21);
 }

@@ -40,7 +40,8 @@ pub struct Args {
     /// Do not write diagnosis.md and figures.
     #[arg(long)]
     pub no_report: bool,
-    /// Cross-validation folds (whole trials).
+    /// Cross-validation folds (whole trials; the hand balance on opposite pulse pairs
+    /// leaves one pair, and for its test one repetition, out instead).
     #[arg(long, default_value_t = 8)]
     pub folds: usize,
     /// Family-wise false-alarm level of the fold t-test.
