@@ -417,8 +417,9 @@ fn search_figure(
     }
 }
 
-/// A held-out perturbed response of fold 0, y axis: the hand's response force,
-/// measured vs baseline vs extended (each fitted without it).
+/// A held-out unit of fold 0 (the odd response to a pair of opposite pulses, or a
+/// direction's mean response), y axis: the hand's response force, measured vs baseline
+/// vs extended (each fitted without it).
 fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
     let ti = (0..h.responses.len()).find(|i| h.folds.of_trial.get(*i) == Some(&0))?;
     let r = &h.responses[ti];
@@ -436,10 +437,19 @@ fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
             .collect()
     };
     Some(Figure {
-        title: format!(
-            "held-out response to the pulse at {:.0}° (trials {:?}), y axis: hand force",
-            r.angle_deg, r.trials
-        ),
+        title: if h.replicates.is_some() {
+            format!(
+                "held-out odd response to the pulses at {:.0}° and {:.0}° (trials {:?}), y axis: hand force",
+                r.angle_deg,
+                r.angle_deg + 180.0,
+                r.trials
+            )
+        } else {
+            format!(
+                "held-out response to the pulse at {:.0}° (trials {:?}), y axis: hand force",
+                r.angle_deg, r.trials
+            )
+        },
         x_desc: "time since the pulse onset (s)".into(),
         y_desc: "−ΔF_hand (N)".into(),
         series: vec![
@@ -516,7 +526,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
         if let Some(f) = hand_heldout_figure(h, hf) {
             figs.push((
                 "heldout.png".into(),
-                "A held-out perturbed trial: measured vs hand baseline vs extended",
+                "A held-out pulse response: measured vs hand baseline vs extended",
                 f,
             ));
         }
@@ -579,8 +589,12 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          judged on held-out trials ({} folds of whole trials).\n\nThe human-side effects are judged on the hand \
          balance: the response to each force pulse against the mean of the unperturbed trials aligned at the same \
          y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
-         `M_arm` and feedback shape `S` known from the segment lengths, over {} s after the onset, in folds of \
-         perturbed trials.",
+         `M_arm` and feedback shape `S` known from the segment lengths and `D`, `K` full 2×2 matrices, over {} s \
+         after the onset. With opposite pulse directions in the session it is fitted on the odd part of each \
+         pair's mean responses (half the difference of the responses to θ and θ + 180°, which drops the terms \
+         even in the pulse and the reference's noise), one pair held out at a time, and tested on the single \
+         repetitions of the pairs, one held out at a time; otherwise on responses averaged by direction, in \
+         folds of directions.",
         d.folds,
         super::hand_signals::HAND_WINDOW_S
     );
