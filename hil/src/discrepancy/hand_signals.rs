@@ -170,40 +170,8 @@ pub fn average_by_angle(responses: Vec<HandResponse>) -> Vec<HandResponse> {
             let group: Vec<&HandResponse> = responses.iter().filter(|r| key(r) == *k).collect();
             let first = *group.first()?;
             let w = 1.0 / group.len() as f64;
-            let mean = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| -> Vec<f64> {
-                let mut out = vec![0.0; f(first).len()];
-                for r in &group {
-                    for (o, v) in out.iter_mut().zip(f(r)) {
-                        *o += w * v;
-                    }
-                }
-                out
-            };
-            let mean_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| -> Vec<Matrix2<f64>> {
-                let mut out = vec![Matrix2::zeros(); f(first).len()];
-                for r in &group {
-                    for (o, v) in out.iter_mut().zip(f(r)) {
-                        *o += v * w;
-                    }
-                }
-                out
-            };
-            Some(HandResponse {
-                id: first.id,
-                rate_hz: first.rate_hz,
-                onset: first.onset,
-                angle_deg: first.angle_deg,
-                dx: [mean(&|r| &r.dx[0]), mean(&|r| &r.dx[1])],
-                dv: [mean(&|r| &r.dv[0]), mean(&|r| &r.dv[1])],
-                da: [mean(&|r| &r.da[0]), mean(&|r| &r.da[1])],
-                df: [mean(&|r| &r.df[0]), mean(&|r| &r.df[1])],
-                dfd: [mean(&|r| &r.dfd[0]), mean(&|r| &r.dfd[1])],
-                m_arm: mean_mat(&|r| &r.m_arm),
-                s: mean_mat(&|r| &r.s),
-                rows: first.rows.clone(),
-                references: group.iter().map(|r| r.references).sum(),
-                trials: group.iter().flat_map(|r| r.trials.clone()).collect(),
-            })
+            let terms: Vec<(&HandResponse, f64, f64)> = group.iter().map(|r| (*r, w, w)).collect();
+            Some(weighted_sum(first.angle_deg, &terms))
         })
         .collect()
 }
@@ -285,27 +253,35 @@ pub fn odd_parts(responses: &[HandResponse], units: OddUnits) -> Option<Vec<Hand
 /// Half the difference of the mean responses `a` (at `θ`) and `b` (at `θ + 180°`), both
 /// non-empty and of one shape; the arm matrices are the mean over both.
 fn odd_unit(angle_deg: f64, a: &[&HandResponse], b: &[&HandResponse]) -> HandResponse {
-    let first = a[0];
     // +1/(2 n_a) on θ, −1/(2 n_b) on θ + 180°; the matrices take 1/(2 n) on both.
     let (wa, wb) = (0.5 / a.len() as f64, 0.5 / b.len() as f64);
-    let odd = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| -> Vec<f64> {
+    let terms: Vec<(&HandResponse, f64, f64)> = a
+        .iter()
+        .map(|r| (*r, wa, wa))
+        .chain(b.iter().map(|r| (*r, -wb, wb)))
+        .collect();
+    weighted_sum(angle_deg, &terms)
+}
+
+/// `Σ w r` over `terms = (r, w, w_matrices)`, all of one shape and at least one: the
+/// signals weighted by `w`, the arm matrices by `w_matrices`; id, rate, onset and rows
+/// of the first, the trials and reference counts of all.
+fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResponse {
+    let first = terms[0].0;
+    let sum = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| -> Vec<f64> {
         let mut out = vec![0.0; f(first).len()];
-        for (group, w) in [(a, wa), (b, -wb)] {
-            for r in group {
-                for (o, v) in out.iter_mut().zip(f(r)) {
-                    *o += w * v;
-                }
+        for (r, w, _) in terms {
+            for (o, v) in out.iter_mut().zip(f(r)) {
+                *o += w * v;
             }
         }
         out
     };
-    let mean_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| {
+    let sum_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| {
         let mut out = vec![Matrix2::zeros(); f(first).len()];
-        for (group, w) in [(a, wa), (b, wb)] {
-            for r in group {
-                for (o, v) in out.iter_mut().zip(f(r)) {
-                    *o += v * w;
-                }
+        for (r, _, w) in terms {
+            for (o, v) in out.iter_mut().zip(f(r)) {
+                *o += v * *w;
             }
         }
         out
@@ -315,16 +291,19 @@ fn odd_unit(angle_deg: f64, a: &[&HandResponse], b: &[&HandResponse]) -> HandRes
         rate_hz: first.rate_hz,
         onset: first.onset,
         angle_deg,
-        dx: [odd(&|r| &r.dx[0]), odd(&|r| &r.dx[1])],
-        dv: [odd(&|r| &r.dv[0]), odd(&|r| &r.dv[1])],
-        da: [odd(&|r| &r.da[0]), odd(&|r| &r.da[1])],
-        df: [odd(&|r| &r.df[0]), odd(&|r| &r.df[1])],
-        dfd: [odd(&|r| &r.dfd[0]), odd(&|r| &r.dfd[1])],
-        m_arm: mean_mat(&|r| &r.m_arm),
-        s: mean_mat(&|r| &r.s),
+        dx: [sum(&|r| &r.dx[0]), sum(&|r| &r.dx[1])],
+        dv: [sum(&|r| &r.dv[0]), sum(&|r| &r.dv[1])],
+        da: [sum(&|r| &r.da[0]), sum(&|r| &r.da[1])],
+        df: [sum(&|r| &r.df[0]), sum(&|r| &r.df[1])],
+        dfd: [sum(&|r| &r.dfd[0]), sum(&|r| &r.dfd[1])],
+        m_arm: sum_mat(&|r| &r.m_arm),
+        s: sum_mat(&|r| &r.s),
         rows: first.rows.clone(),
-        references: a.iter().chain(b).map(|r| r.references).sum(),
-        trials: a.iter().chain(b).flat_map(|r| r.trials.clone()).collect(),
+        references: terms.iter().map(|(r, _, _)| r.references).sum(),
+        trials: terms
+            .iter()
+            .flat_map(|(r, _, _)| r.trials.clone())
+            .collect(),
     }
 }
 
