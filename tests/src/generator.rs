@@ -171,6 +171,22 @@ pub fn generate(
     trials: usize,
     out: &Path,
 ) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
+    generate_with(effect, seed, trials, out, true)
+}
+
+/// [`generate`], with the arm's signal-dependent motor noise switched off when
+/// `motor_noise` is false (the sensor noise and encoder quantum stay): the same subject
+/// and effect, to see what a balance's model leaves when the noise floor is gone.
+///
+/// # Errors
+/// An unknown effect name, or the runtime's error.
+pub fn generate_with(
+    effect: &str,
+    seed: u64,
+    trials: usize,
+    out: &Path,
+    motor_noise: bool,
+) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let hidden = draw(effect, &mut rng)
         .ok_or_else(|| format!("unknown effect {effect:?}; known: {EFFECTS:?}"))?;
@@ -187,6 +203,9 @@ pub fn generate(
     protocol.plant.effects = hidden.effects.clone();
     protocol.subjects.arm.stretch_reflex = hidden.stretch_reflex;
     protocol.subjects.first_is_nominal = false;
+    if !motor_noise {
+        protocol.subjects.arm.noise.activation_cv = 0.0;
+    }
     let options = Options {
         subjects: 1,
         seed,

@@ -31,7 +31,7 @@
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose};
 use rigtwin::session::Session;
-use rigtwin_tests::generator::{EFFECTS, Generated, generate};
+use rigtwin_tests::generator::{EFFECTS, Generated, generate, generate_with};
 
 /// Reaches per session: the shared sessions' 32.
 const TRIALS: usize = 32;
@@ -113,6 +113,44 @@ fn hidden_handle_mass_is_found() {
 #[ignore = "open: on the reach-and-pulse protocol a reflex is named in 10/20 sweep sessions, with held-out gains of 14-39 % and both parameters within 20 % in 4/20"]
 fn hidden_stretch_reflex_is_found() {
     check("stretch-reflex", 21);
+}
+
+/// Without the arm's motor noise the hand balance's model must account for a reflex by
+/// itself: the delay within 20 % and a held-out gain of at least half. The gain `g` may
+/// come out low (by 9–29 % on generator seeds 1, 2, 3, 5: muscles whose activation is
+/// rectified at zero pass no reflex, so the effective shape is less than the assumed
+/// `S`), so it is held to 30 %. A session hiding nothing, equally quiet, names nothing:
+/// with the floor gone (hand baseline NRMSE 0.008), any structural error of the
+/// baseline would show as a cause.
+#[test]
+fn noise_free_reflex_is_found_and_nothing_else() {
+    let tmp = tempfile::tempdir().unwrap();
+    let g = generate_with("stretch-reflex", 2, TRIALS, &tmp.path().join("r"), false).unwrap();
+    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    eprintln!(
+        "hidden {:?}, found {} {:?} gain {:?}",
+        g.hidden.parameters, d.cause, d.parameters, d.gain
+    );
+    assert_eq!(d.cause, "stretch-reflex");
+    let (delay, gain) = (g.hidden.parameters["delay_ms"], g.hidden.parameters["gain"]);
+    assert!(
+        (d.parameters["delay_ms"] - delay).abs() <= 0.2 * delay,
+        "{:?}",
+        d.parameters
+    );
+    assert!(
+        (d.parameters["gain"] - gain).abs() <= 0.3 * gain,
+        "{:?}",
+        d.parameters
+    );
+    assert!(d.gain.unwrap() >= 0.5, "gain {:?}", d.gain);
+    let g = generate_with("none", 2, TRIALS, &tmp.path().join("n"), false).unwrap();
+    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    assert_eq!(d.cause, "none", "{:?}", d.parameters);
 }
 
 #[test]

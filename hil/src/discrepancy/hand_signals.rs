@@ -205,7 +205,9 @@ pub enum OddUnits {
 ///   a noise-free generated session hiding a reflex (33 ms, 182 N s/m) the direction
 ///   averages put the reflex's delay at the search's 10 ms edge (404 N s/m, held-out
 ///   gain 0.33); their odd parts put it at 21 ms, 210 N s/m, gain 0.61, and with the
-///   activation dependence switched off in the generator at 27 ms, 185 N s/m.
+///   activation dependence switched off too (a local change to the generator) at
+///   27 ms, 185 N s/m. Sessions without motor noise: `cargo run --release -p
+///   rigtwin-tests --example generate -- stretch-reflex 2 <dir> --no-motor-noise`.
 /// - The reference: every response subtracts the same mean of unperturbed trials, whose
 ///   own noise does not average out over directions but cancels in the difference. On
 ///   generated sessions hiding nothing the hand baseline's held-out NRMSE falls from
