@@ -6,24 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use rerun::external::re_log_encoding::DecoderApp;
-use rerun::external::re_log_types::{LogMsg, StoreKind};
 use rerun::log::Chunk;
 use rigtwin::session::Session;
 use rigtwin::viz::paths;
 
-/// Every chunk of the recording store of an `.rrd` byte stream, in order.
-fn decode(bytes: &[u8]) -> Vec<Chunk> {
-    let mut out = Vec::new();
-    for msg in DecoderApp::decode_eager(bytes).expect("an rrd stream") {
-        if let LogMsg::ArrowMsg(store, arrow) = msg.expect("a message")
-            && store.kind() == StoreKind::Recording
-        {
-            out.push(Chunk::from_arrow_msg(&arrow).expect("a chunk"));
-        }
-    }
-    out
-}
+mod common;
+use common::recording_chunks;
 
 fn temporal<'a>(chunks: &'a [Chunk], entity: &'a str) -> impl Iterator<Item = &'a Chunk> + 'a {
     chunks
@@ -88,7 +76,7 @@ fn run_saving(args: &[&str], rrd: &Path) -> Vec<Chunk> {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    decode(&std::fs::read(rrd).unwrap())
+    recording_chunks(&std::fs::read(rrd).unwrap())
 }
 
 #[test]

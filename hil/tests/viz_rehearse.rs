@@ -8,8 +8,6 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use rerun::external::re_log_encoding::DecoderApp;
-use rerun::external::re_log_types::{LogMsg, StoreKind};
 use rerun::log::Chunk;
 use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::protocol::Protocol;
@@ -22,6 +20,9 @@ use rigtwin::viz::impedance::{
 use rigtwin::viz::{Which, ellipse_axes, paths};
 use rigtwin_world::PlantEffects;
 use rigtwin_world::config::RailFriction;
+
+mod common;
+use common::{messages, recording_chunks, static_line_names};
 
 /// Trials of the reach-perturb schedule rehearsed: seed 1's first 16 hold 5 force pulses in
 /// different directions, enough for the seven Börner parameters.
@@ -60,25 +61,6 @@ fn rehearse_saved(dir: &Path, protocol: &str, trials: usize, name: &str) -> (Pat
     ]);
     assert!(stdout.contains("viewer: 1 sessions"), "{stdout}");
     (out, std::fs::read(rrd).unwrap())
-}
-
-fn messages(bytes: &[u8]) -> Vec<LogMsg> {
-    DecoderApp::decode_eager(bytes)
-        .expect("an rrd stream")
-        .map(|m| m.expect("a message"))
-        .collect()
-}
-
-fn recording_chunks(bytes: &[u8]) -> Vec<Chunk> {
-    messages(bytes)
-        .into_iter()
-        .filter_map(|msg| match msg {
-            LogMsg::ArrowMsg(store, arrow) if store.kind() == StoreKind::Recording => {
-                Some(Chunk::from_arrow_msg(&arrow).expect("a chunk"))
-            }
-            _ => None,
-        })
-        .collect()
 }
 
 fn of<'a>(chunks: &'a [Chunk], entity: &str) -> impl Iterator<Item = &'a Chunk> {
@@ -155,14 +137,7 @@ fn assert_arrows_are_axes(arrows: &[[f32; 2]], m: [[f64; 2]; 2], scale: f64, wha
 
 /// The names of the lines of a series entity (its static `SeriesLines` row).
 fn series_names(chunks: &[Chunk], entity: &str) -> Vec<String> {
-    of(chunks, entity)
-        .filter(|c| c.is_static())
-        .flat_map(|c| {
-            c.iter_slices::<String>("SeriesLines:names".into())
-                .flat_map(|names| names.into_iter().map(|n| n.to_string()))
-                .collect::<Vec<_>>()
-        })
-        .collect()
+    static_line_names(of(chunks, entity))
 }
 
 fn csv_rows(session: &Path) -> usize {

@@ -6,8 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use rerun::external::re_log_encoding::DecoderApp;
-use rerun::external::re_log_types::{LogMsg, StoreKind};
+use rerun::external::re_log_types::StoreKind;
 use rerun::log::Chunk;
 use rigtwin::session::Session;
 use rigtwin::viz::{
@@ -15,18 +14,12 @@ use rigtwin::viz::{
     TrialColumns, TrialMeta, Viewer, paths,
 };
 
+mod common;
+use common::messages;
+
 /// Every chunk of every store in an `.rrd` byte stream, in order.
 fn decode(bytes: &[u8]) -> Vec<(StoreKind, Chunk)> {
-    let mut out = Vec::new();
-    for msg in DecoderApp::decode_eager(bytes).expect("an rrd stream") {
-        if let LogMsg::ArrowMsg(store, arrow) = msg.expect("a message") {
-            out.push((
-                store.kind(),
-                Chunk::from_arrow_msg(&arrow).expect("a chunk"),
-            ));
-        }
-    }
-    out
+    common::chunks(bytes)
 }
 
 /// Rows per entity of the recording store.
@@ -78,14 +71,7 @@ fn series_line(chunks: &[(StoreKind, Chunk)], entity: &str, k: usize, width: usi
 
 /// The line names of a series entity, from its static `SeriesLines` row.
 fn line_names(chunks: &[(StoreKind, Chunk)], entity: &str) -> Vec<String> {
-    recording_chunks(chunks, entity)
-        .filter(|c| c.is_static())
-        .flat_map(|c| {
-            c.iter_slices::<String>("SeriesLines:names".into())
-                .flat_map(|names| names.into_iter().map(|n| n.to_string()))
-                .collect::<Vec<_>>()
-        })
-        .collect()
+    common::static_line_names(recording_chunks(chunks, entity))
 }
 
 /// Every per-sample series entity: the six x/y pairs of a trial and the arm angles, two lines
@@ -370,14 +356,6 @@ fn the_ellipse_drawn_has_the_axes_of_its_matrix() {
     let min = radii.iter().copied().fold(f64::MAX, f64::min);
     assert!((max - 400.0 * SCALE).abs() < 1e-6, "{max}");
     assert!((min - 100.0 * SCALE).abs() < 2e-6, "{min}");
-}
-
-/// Every message of an `.rrd`, in order (the footer is not a message).
-fn messages(bytes: &[u8]) -> Vec<LogMsg> {
-    DecoderApp::decode_eager(bytes)
-        .expect("an rrd stream")
-        .map(|m| m.expect("a message"))
-        .collect()
 }
 
 /// rerun writes the footer's per-store manifests in `HashMap` order, so two saves may differ
