@@ -39,7 +39,7 @@ use super::delay::ActuationDelay;
 use super::error::DiscrepancyError;
 use super::friction::RailFriction;
 use super::gram::Gram;
-use super::hand::{HandJudgement, baseline_parameters, judge_hand};
+use super::hand::{HandJudgement, ReplicateTest, baseline_parameters, judge_hand};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
@@ -428,7 +428,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             d.hand_baseline = baseline_parameters(&h.baseline.beta, h.fb_delay_s)
                 .into_iter()
                 .collect();
-            d.hand_test_units = h.replicates.as_ref().map(|r| r.units);
+            d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
             let test_folds = h.replicates.as_ref().map_or(&h.folds, |r| &r.folds);
             let df = test_folds.k.saturating_sub(1).max(1);
             let t_crit = student_t_critical(alpha_each, df as f64);
@@ -437,16 +437,15 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             for (i, hf) in h.fits.iter().enumerate() {
                 let c = hf.candidate.as_ref();
                 let fit = &hf.fit;
-                let (nrmse, gain, mut fold_gains, mut t) = fold_stats(fit, &h.baseline, base_nrmse);
-                // The test on independent units when the fitted ones average repetitions.
-                if let Some((rfit, rep)) = h
+                let (nrmse, gain, _, _) = fold_stats(fit, &h.baseline, base_nrmse);
+                // The test runs on independent units when the fitted ones average
+                // repetitions, else on the fitted ones.
+                let (test_fit, test_base) = h
                     .replicates
                     .as_ref()
-                    .and_then(|rep| rep.fits.get(i).map(|f| (f, rep)))
-                {
-                    let (_, _, g, rt) = fold_stats(rfit, &rep.baseline, rep.baseline.nrmse());
-                    (fold_gains, t) = (g, rt);
-                }
+                    .and_then(|rep| rep.fits.get(i).map(|f| (f, &rep.baseline)))
+                    .unwrap_or((fit, &h.baseline));
+                let (_, _, fold_gains, t) = fold_stats(test_fit, test_base, test_base.nrmse());
                 let fold_params: Vec<Vec<(String, f64)>> = fit
                     .folds
                     .iter()
@@ -590,7 +589,7 @@ fn evidence(
             match &h.replicates {
                 Some(r) => format!(
                     "odd parts of the mean responses to opposite pulses, tested on {} repetitions",
-                    r.units
+                    r.units()
                 ),
                 None => "averaged responses".to_string(),
             },

@@ -75,9 +75,9 @@
 //! and what tells `g` from `δ` is the curvature of `e^{−iωδ}` over the pulse's band
 //! (below ~10 Hz, `ωδ` < 2). On sessions generated without the arm's motor noise
 //! (generator seeds 1, 2, 3, 5 with `--no-motor-noise`; asserted for seed 2 by
-//! `noise_free_reflex_is_found_and_nothing_else` in `tests/tests/hidden_effect.rs`) the delay comes out within 12 % and the gain 9–29 % low
-//! (muscles whose activation is rectified at zero carry no reflex, so the effective
-//! shape is less than `S`); that needed the odd parts (with direction averages the
+//! `noise_free_reflex_is_found_and_nothing_else` in `tests/tests/hidden_effect.rs`)
+//! the delay comes out within 12 % and the gain 9–29 % low (muscles whose activation
+//! is rectified at zero carry no reflex, so the effective shape is less than `S`); that needed the odd parts (with direction averages the
 //! held-out gain fell monotonically from the grid's 10 ms edge) and the full `D` and
 //! `K` ([`base_columns`]). With motor noise the curvature is mostly covered: the
 //! stronger reflexes are named about half the time, 4 of 20 with both parameters
@@ -542,14 +542,21 @@ impl std::fmt::Debug for HandFit {
 /// at the feedback delay of the main fit.
 #[derive(Debug)]
 pub struct ReplicateTest {
-    /// Units (one per repetition of a pair of opposite directions).
-    pub units: usize,
-    /// Folds over them.
+    /// Folds over the units (one per repetition of a pair of opposite directions), one
+    /// unit each.
     pub folds: Folds,
     /// The baseline's fit.
     pub baseline: CvFit,
     /// The candidates' fits, in the order of [`HandJudgement::fits`].
     pub fits: Vec<CvFit>,
+}
+
+impl ReplicateTest {
+    /// Number of units tested.
+    #[must_use]
+    pub fn units(&self) -> usize {
+        self.folds.of_trial.len()
+    }
 }
 
 /// Everything the hand balance computed.
@@ -563,7 +570,7 @@ pub struct HandJudgement {
     /// ([`OddUnits::Averaged`]); `None` when the units are already independent, and
     /// then the folds above carry the test.
     pub replicates: Option<ReplicateTest>,
-    /// Folds over the perturbed trials.
+    /// Folds over [`Self::responses`].
     pub folds: Folds,
     /// Feedback delay chosen for the baseline, s.
     pub fb_delay_s: f64,
@@ -633,7 +640,6 @@ pub fn judge_hand(
                 .map(|f| cv(f.candidate.as_ref(), f.candidate.name()))
                 .collect::<Result<Vec<_>, DiscrepancyError>>()?;
             Some(ReplicateTest {
-                units: units.len(),
                 folds,
                 baseline,
                 fits,
