@@ -178,8 +178,12 @@ pub struct Diagnosis {
     /// repetitions.
     pub hand_test_units: Option<usize>,
     /// Held-out NRMSE of the hand balance's baseline (the arm's known inertia, fitted
-    /// D, K and delayed feedback), normalised by the hand's response force.
+    /// D, K and delayed feedback), normalised by the hand's response force; both
+    /// weighted as in [`Self::hand_weighting`].
     pub hand_baseline_nrmse: Option<f64>,
+    /// The hand balance's row weighting ([`super::hand::Whitening`]): the correlation
+    /// time filtered out, ms, and the matrix `W` between the axes, row-major.
+    pub hand_weighting: BTreeMap<String, f64>,
     /// The hand balance baseline's fitted parameters.
     pub hand_baseline: BTreeMap<String, f64>,
     /// Every judged candidate, best held-out gain first.
@@ -312,6 +316,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_test_units: None,
         hand_baseline_nrmse: None,
         hand_baseline: BTreeMap::new(),
+        hand_weighting: BTreeMap::new(),
         ranking: Vec::new(),
         runner_up: None,
         threshold: None,
@@ -429,6 +434,17 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 .into_iter()
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
+            let w = &h.whitening;
+            d.hand_weighting = [
+                ("noise_time_ms", w.noise_time_s * 1e3),
+                ("w11", w.axes[(0, 0)]),
+                ("w12", w.axes[(0, 1)]),
+                ("w21", w.axes[(1, 0)]),
+                ("w22", w.axes[(1, 1)]),
+            ]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect();
             let test_folds = h.replicates.as_ref().map_or(&h.folds, |r| &r.folds);
             let df = test_folds.k.saturating_sub(1).max(1);
             let t_crit = student_t_critical(alpha_each, df as f64);
@@ -583,7 +599,8 @@ fn evidence(
         ev.push(format!(
             "hand balance baseline ({} perturbed trials as {} {}, {} s windows, the arm's inertia from segment lengths): \
              D = [{:.1} {:.1}; {:.1} {:.1}] N s/m, K = [{:.0} {:.0}; {:.0} {:.0}] N/m, delayed feedback {:.0} ms with \
-             gains {:.0} N/m, {:.1} N s/m (velocity gain at the arm's ratio); held-out NRMSE {:.4}",
+             gains {:.0} N/m, {:.1} N s/m (velocity gain at the arm's ratio); rows whitened for a {:.0} ms noise and \
+             between the axes; held-out NRMSE {:.4} of the whitened force",
             d.hand_trials_used,
             h.responses.len(),
             match &h.replicates {
@@ -605,6 +622,7 @@ fn evidence(
             p("feedback_delay_ms"),
             p("feedback_position_gain_n_per_m"),
             p("feedback_velocity_gain_n_s_per_m"),
+            h.whitening.noise_time_s * 1e3,
             nrmse
         ));
     }

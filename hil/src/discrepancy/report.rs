@@ -26,6 +26,18 @@ fn fmt_params(
 }
 
 /// Four significant digits, plain for ordinary magnitudes.
+/// `W` of the hand balance's weighting as `[[w11, w12], [w21, w22]]`.
+fn weighting_matrix(w: &std::collections::BTreeMap<String, f64>) -> String {
+    let g = |k: &str| w.get(k).copied().unwrap_or(f64::NAN);
+    format!(
+        "[[{:.3}, {:.3}], [{:.3}, {:.3}]]",
+        g("w11"),
+        g("w12"),
+        g("w21"),
+        g("w22")
+    )
+}
+
 fn sig(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
@@ -62,7 +74,7 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
-            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths, feedback delay {:.0} ms, held-out NRMSE {:.4}",
+            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {}), held-out NRMSE {:.4}",
             d.hand_trials_used,
             d.hand_units,
             d.hand_test_units
@@ -72,6 +84,11 @@ pub fn table(d: &Diagnosis) -> String {
                 .get("feedback_delay_ms")
                 .copied()
                 .unwrap_or(f64::NAN),
+            d.hand_weighting
+                .get("noise_time_ms")
+                .copied()
+                .unwrap_or(f64::NAN),
+            weighting_matrix(&d.hand_weighting),
             b
         );
     }
@@ -594,7 +611,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          pair's mean responses (half the difference of the responses to θ and θ + 180°, which drops the terms \
          even in the pulse and the reference's noise), one pair held out at a time, and tested on the single \
          repetitions of the pairs, one held out at a time; otherwise on responses averaged by direction, in \
-         folds of directions.",
+         folds of directions. Every row of the hand balance is weighted (generalised least squares): filtered by          `1 − φ z⁻¹` in time, `φ = exp(−Δt/τ)` with τ the arm's motor-noise correlation time, and multiplied          between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the baseline's residual          so filtered; its NRMSEs and gains are those of the weighted force.",
         d.folds,
         super::hand_signals::HAND_WINDOW_S
     );
