@@ -421,7 +421,8 @@ pub fn hand_grams(
         .collect()
 }
 
-/// Per row (axes interleaved: x then y of each evaluated sample): target, fit, normaliser.
+/// Per row (axes interleaved: x then y of each evaluated sample): target, fit,
+/// normaliser; weighted by `w` ([`whitened_rows`], which drops the first sample) or not.
 #[must_use]
 pub fn hand_fit_rows(
     c: &dyn HandCandidate,
@@ -429,11 +430,16 @@ pub fn hand_fit_rows(
     s: usize,
     beta: &[f64],
     fb_delay_s: f64,
+    w: Option<&Whitening>,
 ) -> Vec<(f64, f64, f64)> {
     let mut out = Vec::new();
-    c.rows(r, s, fb_delay_s, &mut |x, y, n| {
+    let mut push = |x: &[f64], y: f64, n: f64| {
         out.push((y, x.iter().zip(beta).map(|(a, b)| a * b).sum(), n));
-    });
+    };
+    match w {
+        Some(w) => whitened_rows(c, r, s, fb_delay_s, w, &mut push),
+        None => c.rows(r, s, fb_delay_s, &mut push),
+    }
     out
 }
 

@@ -28,7 +28,8 @@ fn fmt_params(
 /// Four significant digits, plain for ordinary magnitudes.
 /// `W` of the hand balance's weighting as `[[w11, w12], [w21, w22]]`.
 fn weighting_matrix(w: &std::collections::BTreeMap<String, f64>) -> String {
-    let g = |k: &str| w.get(k).copied().unwrap_or(f64::NAN);
+    // `+ 0.0` turns the Cholesky factor's −0 into 0.
+    let g = |k: &str| w.get(k).copied().unwrap_or(f64::NAN) + 0.0;
     format!(
         "[[{:.3}, {:.3}], [{:.3}, {:.3}]]",
         g("w11"),
@@ -338,7 +339,7 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
     if c.name() == "handle-mass" {
         let mut cloud = Vec::new();
         for r in &h.responses {
-            let rows = hand_fit_rows(&HandBaseline, r, 0, &h.baseline.beta, h.fb_delay_s);
+            let rows = hand_fit_rows(&HandBaseline, r, 0, &h.baseline.beta, h.fb_delay_s, None);
             for (k, (y, f, _)) in rows.iter().enumerate() {
                 let (j, axis) = (r.rows[k / 2], k % 2);
                 cloud.push((r.da[axis][j], y - f));
@@ -435,15 +436,27 @@ fn search_figure(
 }
 
 /// A held-out unit of fold 0 (the odd response to a pair of opposite pulses, or a
-/// direction's mean response), y axis: the hand's response force, measured vs baseline
-/// vs extended (each fitted without it).
-fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
+/// direction's mean response), second axis: the hand's response force, measured vs
+/// baseline vs extended (each fitted without it). `weighted`: as the balance judges it
+/// ([`super::hand::Whitening`]: whitened in time, the second row of `W`), where the
+/// held-out gain is measured; else in newtons along y.
+fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit, weighted: bool) -> Option<Figure> {
     let ti = (0..h.responses.len()).find(|i| h.folds.of_trial.get(*i) == Some(&0))?;
     let r = &h.responses[ti];
     let (bf, ef) = (h.baseline.folds.first()?, hf.fit.folds.first()?);
-    let base = hand_fit_rows(&HandBaseline, r, 0, &bf.beta, h.fb_delay_s);
-    let ext = hand_fit_rows(hf.candidate.as_ref(), r, ef.setting, &ef.beta, h.fb_delay_s);
-    let t = |k: usize| (r.rows[k / 2] as f64 - r.onset as f64) / r.rate_hz;
+    let w = weighted.then_some(&h.whitening);
+    let base = hand_fit_rows(&HandBaseline, r, 0, &bf.beta, h.fb_delay_s, w);
+    let ext = hand_fit_rows(
+        hf.candidate.as_ref(),
+        r,
+        ef.setting,
+        &ef.beta,
+        h.fb_delay_s,
+        w,
+    );
+    // The weighted rows start one sample later.
+    let first = usize::from(weighted);
+    let t = |k: usize| (r.rows[k / 2 + first] as f64 - r.onset as f64) / r.rate_hz;
     // Each model's prediction of −ΔF_hand: its fit plus its own known inertia term
     // (`−ΔF − y`, which differs between models when the grip moves the hand).
     let pick = |rows: &[(f64, f64, f64)], measured: bool| -> Vec<(f64, f64)> {
@@ -453,22 +466,31 @@ fn hand_heldout_figure(h: &HandJudgement, hf: &HandFit) -> Option<Figure> {
             .map(|(k, (y, f, n))| (t(k), if measured { -n } else { f - n - y }))
             .collect()
     };
+    let what = if weighted {
+        "weighted (as judged)"
+    } else {
+        "y axis: hand force"
+    };
     Some(Figure {
         title: if h.replicates.is_some() {
             format!(
-                "held-out odd response to the pulses at {:.0}° and {:.0}° (trials {:?}), y axis: hand force",
+                "held-out odd response to the pulses at {:.0}° and {:.0}° (trials {:?}), {what}",
                 r.angle_deg,
                 r.angle_deg + 180.0,
                 r.trials
             )
         } else {
             format!(
-                "held-out response to the pulse at {:.0}° (trials {:?}), y axis: hand force",
+                "held-out response to the pulse at {:.0}° (trials {:?}), {what}",
                 r.angle_deg, r.trials
             )
         },
         x_desc: "time since the pulse onset (s)".into(),
-        y_desc: "−ΔF_hand (N)".into(),
+        y_desc: if weighted {
+            "W (1 − φ z⁻¹) (−ΔF_hand), second row (N)".into()
+        } else {
+            "−ΔF_hand (N)".into()
+        },
         series: vec![
             Series {
                 label: "measured".into(),
@@ -540,10 +562,17 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
             "What the cause looks like",
             hand_cause_figure(h, hf),
         ));
-        if let Some(f) = hand_heldout_figure(h, hf) {
+        if let Some(f) = hand_heldout_figure(h, hf, false) {
             figs.push((
                 "heldout.png".into(),
                 "A held-out pulse response: measured vs hand baseline vs extended",
+                f,
+            ));
+        }
+        if let Some(f) = hand_heldout_figure(h, hf, true) {
+            figs.push((
+                "heldout-weighted.png".into(),
+                "The same response weighted as the hand balance judges it (whitened in time and between the axes; the held-out gain is measured here)",
                 f,
             ));
         }
