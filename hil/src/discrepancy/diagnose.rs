@@ -443,7 +443,8 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 ("w22", w.axes[(1, 1)]),
             ]
             .into_iter()
-            .map(|(k, v)| (k.to_string(), v))
+            // `+ 0.0`: the Cholesky factor's upper zero is −0.
+            .map(|(k, v)| (k.to_string(), v + 0.0))
             .collect();
             let test_folds = h.replicates.as_ref().map_or(&h.folds, |r| &r.folds);
             let df = test_folds.k.saturating_sub(1).max(1);

@@ -28,8 +28,7 @@ fn fmt_params(
 /// Four significant digits, plain for ordinary magnitudes.
 /// `W` of the hand balance's weighting as `[[w11, w12], [w21, w22]]`.
 fn weighting_matrix(w: &std::collections::BTreeMap<String, f64>) -> String {
-    // `+ 0.0` turns the Cholesky factor's −0 into 0.
-    let g = |k: &str| w.get(k).copied().unwrap_or(f64::NAN) + 0.0;
+    let g = |k: &str| w.get(k).copied().unwrap_or(f64::NAN);
     format!(
         "[[{:.3}, {:.3}], [{:.3}, {:.3}]]",
         g("w11"),
