@@ -13,21 +13,21 @@
 //! Human side (hand balance, 32 trials of which 24 perturbed at 4 pairs of opposite
 //! directions; full 2×2 `D` and `K`, fitted on the odd parts of each pair's mean
 //! responses, tested on the 12 repetitions, every row whitened in time and between the
-//! axes, `hil/src/discrepancy/hand.rs`): `grip-compliance` is found with gains of
-//! 77–91 % (seed 21: k within 20 %). `handle-mass` is found with its mass within 20 %
-//! and explains 32–76 % of the hand balance's residual, median 59 %, at least half on
-//! 16 of 20 sweep seeds (seed 1003: gain above 0.6); the floor is the arm's motor noise
-//! (weighted hand baseline NRMSE 0.04–0.08 with no effect). `stretch-reflex` (15–35 ms,
-//! 100–250 N s/m) is named in 19 of 20 sweep sessions, never misnamed, with gains of
-//! 11–40 %, and 9 of 20 have both parameters within 20 %: the fitted reflex gain comes
-//! out mostly 15–35 % low, also without motor noise (20–37 %, where held-out gains stop
-//! at 0.63–0.80), so the model's reflex shape at the hand is not quite the arm's (see
-//! `hand.rs`). Its test with the 50 % is ignored: open work, not a pass;
-//! `hidden_stretch_reflex_is_named_under_motor_noise` asserts the name and both
-//! parameters on a seed where they hold, with a held-out gain of at least 25 %.
+//! axes, the muscles without tone at half weight in the feedback shape,
+//! `hil/src/discrepancy/hand.rs`): `grip-compliance` is found with gains of 74–90 %
+//! (seed 21: k within 20 %). `handle-mass` is found with its mass within 20 % and
+//! explains 32–76 % of the hand balance's residual, median 59 %, at least half on 16 of
+//! 20 sweep seeds (seed 1003: 0.728 kg for 0.725, gain 0.63); the floor is the arm's
+//! motor noise (weighted hand baseline NRMSE 0.04–0.08 with no effect).
+//! `stretch-reflex` (15–35 ms, 100–250 N s/m) is named in 19 of 20 sweep sessions,
+//! never misnamed, 12 of 20 with both parameters within 20 %, but with held-out gains
+//! of 12–45 %: with 24 pulses the arm's motor noise leaves the reflex's residual only
+//! about twice the floor. Its test with the 50 % is ignored: open work, not a
+//! pass; `hidden_stretch_reflex_is_named_under_motor_noise` asserts the name and both
+//! parameters, with a held-out gain of at least 25 %.
 //! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README): none 20/20
 //! none; plant side 20/20 named each; grip 20/20; handle mass 20/20 named, 20/20
-//! within 20 %; reflex 19/20 named (9/20 parameters within 20 %), 1 none.
+//! within 20 %; reflex 19/20 named (12/20 parameters within 20 %), 1 none.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
@@ -114,7 +114,7 @@ fn hidden_handle_mass_is_found() {
 }
 
 #[test]
-#[ignore = "open: a reflex is named in 19/20 sweep sessions, but its gain comes out 15-35 % low (9/20 with both parameters within 20 %) and held-out gains stay at 11-40 %"]
+#[ignore = "open: a reflex is named in 19/20 sweep sessions, 12/20 with both parameters within 20 %, but its held-out gain stays at 12-45 % (the motor-noise floor of 24 pulses)"]
 fn hidden_stretch_reflex_is_found() {
     check("stretch-reflex", 21);
 }
@@ -152,23 +152,22 @@ fn hand_cause_report_has_the_force_and_the_weighted_response() {
 }
 
 /// With the arm's motor noise, the reflex is named (19 of 20 sweep seeds) and here, as
-/// on 9 of 20 sweep seeds, both parameters come out within 20 % (seed 23: 27 ms,
-/// 137 N s/m for 26 ms, 137 N s/m; t 7.6 against 2.91). It guards the hand balance's
-/// weighting: unweighted, this session's reflex was not named. The held-out gain is
-/// held to 25 % instead of the 50 % (measured 0.36): with 32 trials the arm's
-/// motor noise leaves the weighted baseline an NRMSE floor of 0.04–0.08 on sessions
-/// hiding nothing, and the reflex's residual here is about twice that; the 50 %
-/// stays the ignored test above.
+/// on 12 of 20 sweep seeds, both parameters come out within 20 % (seed 24: 35 ms,
+/// 214 N s/m for 33 ms, 201 N s/m; t 6.1 against 2.91). It guards the feedback shape's
+/// muscle weights: with every muscle at weight 1 this session's delay came out at the
+/// grid's 50 ms edge. The held-out gain is held to 25 % instead of the 50 %
+/// (measured 0.37): with 32 trials the arm's motor noise leaves the weighted baseline an
+/// NRMSE floor of 0.04–0.08 on sessions hiding nothing, and the reflex's residual here
+/// is about twice that; the 50 % stays the ignored test above.
 #[test]
 fn hidden_stretch_reflex_is_named_under_motor_noise() {
-    check_with_gain("stretch-reflex", 23, 0.25);
+    check_with_gain("stretch-reflex", 24, 0.25);
 }
 
 /// Without the arm's motor noise the hand balance's model must account for a reflex by
-/// itself: the delay within 20 % and a held-out gain of at least half. The gain `g` may
-/// come out low (by 20–37 % on generator seeds 1, 2, 3, 5, by 20 % on seed 2: muscles
-/// whose activation is rectified at zero pass no reflex, so the effective shape is less
-/// than the assumed `S`), so it is held to 30 %. A session hiding nothing, equally
+/// itself: both parameters within 20 % and a held-out gain of at least half (generator
+/// seeds 1, 2, 3, 5: delays 26/23, 31/33, 27/27, 22/19 ms, gains 17 % low to 1 % high,
+/// held-out gains 0.71–0.82; seed 2 is asserted). A session hiding nothing, equally
 /// quiet, names nothing: with the floor gone (hand baseline NRMSE 0.009), any
 /// structural error of the baseline would show as a cause.
 #[test]
@@ -190,7 +189,7 @@ fn noise_free_reflex_is_found_and_nothing_else() {
         d.parameters
     );
     assert!(
-        (d.parameters["gain"] - gain).abs() <= 0.3 * gain,
+        (d.parameters["gain"] - gain).abs() <= 0.2 * gain,
         "{:?}",
         d.parameters
     );
