@@ -343,15 +343,11 @@ impl Whitening {
         let time = Whitening::in_time();
         let mut sigma = Matrix2::zeros();
         for r in units {
-            let mut e = Vector2::zeros();
-            let mut k = 0usize;
-            whitened_rows(c, r, s, fb_delay_s, &time, &mut |x, y, _| {
-                e[k % 2] = y - x.iter().zip(beta).map(|(a, b)| a * b).sum::<f64>();
-                k += 1;
-                if k.is_multiple_of(2) {
-                    sigma += e * e.transpose();
-                }
-            });
+            let rows = hand_fit_rows(c, r, s, beta, fb_delay_s, Some(&time));
+            for pair in rows.chunks_exact(2) {
+                let e = Vector2::new(pair[0].0 - pair[0].1, pair[1].0 - pair[1].1);
+                sigma += e * e.transpose();
+            }
         }
         let det = sigma.determinant();
         if !(det > 0.0 && det.is_finite()) {
@@ -775,15 +771,21 @@ pub fn judge_hand(
         "hand feedback delay",
     )?;
     let fb_delay_s = FEEDBACK_DELAYS_MS[delay.setting] * 1e-3;
-    let first = cross_validate(
-        &grams_of(&responses, &HandBaseline, fb_delay_s, &time),
-        &folds,
-        "hand baseline",
-    )?;
     // Weighted least squares needs the residual's shape between the axes: from the
-    // baseline's residual, time-filtered, on all units (a weighting, not a fitted
-    // effect; every candidate and the baseline then share it).
-    let whitening = Whitening::fitted(&HandBaseline, &responses, 0, &first.beta, fb_delay_s);
+    // baseline's residual, time-filtered, fitted on all units (a weighting, not a fitted
+    // effect; every candidate and the baseline then share it). The feedback delay above
+    // is searched with the time filter alone, since this needs a delay.
+    let first = Gram::sum(
+        base_columns(),
+        grams_of(&responses, &HandBaseline, fb_delay_s, &time)
+            .iter()
+            .map(|g| &g[0]),
+    )
+    .solve()
+    .ok_or_else(|| DiscrepancyError::Singular {
+        what: "hand baseline".to_string(),
+    })?;
+    let whitening = Whitening::fitted(&HandBaseline, &responses, 0, &first, fb_delay_s);
     let grams = |c: &dyn HandCandidate, fb: f64| grams_of(&responses, c, fb, &whitening);
     let baseline = cross_validate(&grams(&HandBaseline, fb_delay_s), &folds, "hand baseline")?;
     let candidates: Vec<Box<dyn HandCandidate>> = vec![
