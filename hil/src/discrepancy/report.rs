@@ -634,12 +634,16 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          judged on held-out trials ({} folds of whole trials).\n\nThe human-side effects are judged on the hand \
          balance: the response to each force pulse against the mean of the unperturbed trials aligned at the same \
          y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
-         `M_arm` and feedback shape `S` known from the segment lengths and `D`, `K` full 2×2 matrices, over {} s \
+         `M_arm` and feedback shape `S` known from the segment lengths (muscles without tone at half weight in \
+         `S`: they answer only their stretch) and `D`, `K` full 2×2 matrices, over {} s \
          after the onset. With opposite pulse directions in the session it is fitted on the odd part of each \
          pair's mean responses (half the difference of the responses to θ and θ + 180°, which drops the terms \
          even in the pulse and the reference's noise), one pair held out at a time, and tested on the single \
          repetitions of the pairs, one held out at a time; otherwise on responses averaged by direction, in \
-         folds of directions. Every row of the hand balance is weighted (generalised least squares): filtered by          `1 − φ z⁻¹` in time, `φ = exp(−Δt/τ)` with τ the arm's motor-noise correlation time, and multiplied          between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the baseline's residual          so filtered; its NRMSEs and gains are those of the weighted force.",
+         folds of directions. Every row of the hand balance is weighted (generalised least squares): filtered by \
+         `1 − φ z⁻¹` in time, `φ = exp(−Δt/τ)` with τ the arm's motor-noise correlation time, and multiplied \
+         between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the baseline's residual \
+         so filtered; its NRMSEs and gains are those of the weighted force.",
         d.folds,
         super::hand_signals::HAND_WINDOW_S
     );
