@@ -773,19 +773,10 @@ pub fn judge_hand(
     let fb_delay_s = FEEDBACK_DELAYS_MS[delay.setting] * 1e-3;
     // Weighted least squares needs the residual's shape between the axes: from the
     // baseline's residual, time-filtered, fitted on all units (a weighting, not a fitted
-    // effect; every candidate and the baseline then share it). The feedback delay above
-    // is searched with the time filter alone, since this needs a delay.
-    let first = Gram::sum(
-        base_columns(),
-        grams_of(&responses, &HandBaseline, fb_delay_s, &time)
-            .iter()
-            .map(|g| &g[0]),
-    )
-    .solve()
-    .ok_or_else(|| DiscrepancyError::Singular {
-        what: "hand baseline".to_string(),
-    })?;
-    let whitening = Whitening::fitted(&HandBaseline, &responses, 0, &first, fb_delay_s);
+    // effect; every candidate and the baseline then share it). The delay search's fit on
+    // all units at its chosen delay is that baseline (the same rows), so the feedback
+    // delay is searched with the time filter alone.
+    let whitening = Whitening::fitted(&HandBaseline, &responses, 0, &delay.beta, fb_delay_s);
     let grams = |c: &dyn HandCandidate, fb: f64| grams_of(&responses, c, fb, &whitening);
     let baseline = cross_validate(&grams(&HandBaseline, fb_delay_s), &folds, "hand baseline")?;
     let candidates: Vec<Box<dyn HandCandidate>> = vec![
