@@ -3,43 +3,60 @@
 //! ```sh
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/gen
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 2 /tmp/q --no-motor-noise
+//! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/r --repetitions 9
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
 //! Arguments: effect name (`none` or a catalog name), seed, output folder (new or
-//! empty); optional fourth: trials (default 32). `--no-motor-noise` (anywhere) switches
-//! the arm's motor noise off, keeping subject and effect. Prints the session folder and
-//! what it hides.
+//! empty); optional fourth: trials (default 32, or a third more than the pulses with
+//! `--repetitions`). `--no-motor-noise` switches the arm's motor noise off, keeping
+//! subject and effect; `--repetitions N` gives N pulses per angle (default 3, the
+//! shared sessions'). Prints the session folder and what it hides.
 
-use rigtwin_tests::generator::{EFFECTS, generate_with};
+use rigtwin_tests::generator::{Design, EFFECTS, generate_design};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
-    let all: Vec<String> = std::env::args().skip(1).collect();
-    let quiet = all.iter().any(|a| a == "--no-motor-noise");
-    let args: Vec<&String> = all.iter().filter(|a| *a != "--no-motor-noise").collect();
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N]; effects {EFFECTS:?}"
         )
     };
-    let [effect, seed, out, rest @ ..] = args.as_slice() else {
+    let mut positional = Vec::new();
+    let mut motor_noise = true;
+    let mut repetitions = None;
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--no-motor-noise" => motor_noise = false,
+            "--repetitions" => {
+                let n = args
+                    .next()
+                    .ok_or_else(|| format!("--repetitions needs a number; {}", usage()))?;
+                let n: u32 = n.parse().map_err(|e| format!("--repetitions {n:?}: {e}"))?;
+                if n == 0 {
+                    return Err("--repetitions must be at least 1".into());
+                }
+                repetitions = Some(n);
+            }
+            s if s.starts_with("--") => {
+                return Err(format!("unexpected argument {s:?}; {}", usage()).into());
+            }
+            _ => positional.push(a),
+        }
+    }
+    let [effect, seed, out, rest @ ..] = positional.as_slice() else {
         return Err(usage().into());
     };
-    if let Some(bad) = rest.get(1).or(rest.iter().find(|a| a.starts_with("--"))) {
+    if let Some(bad) = rest.get(1) {
         return Err(format!("unexpected argument {bad:?}; {}", usage()).into());
     }
     let seed: u64 = seed.parse().map_err(|e| format!("seed {seed:?}: {e}"))?;
-    let trials: usize = match rest.first() {
-        Some(t) => t.parse().map_err(|e| format!("trials {t:?}: {e}"))?,
-        None => 32,
-    };
-    let g = generate_with(
-        effect,
-        seed,
-        trials,
-        std::path::Path::new(out.as_str()),
-        !quiet,
-    )?;
+    let mut design = repetitions.map_or(Design::SHARED, Design::with_pulses);
+    if let Some(t) = rest.first() {
+        design.trials = t.parse().map_err(|e| format!("trials {t:?}: {e}"))?;
+    }
+    design.motor_noise = motor_noise;
+    let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
     Ok(())

@@ -7,6 +7,9 @@
 //! sensor noise and encoder quantum, recorded at 1 kHz as 4-tick block means like the
 //! shared emulated rig, without ground-truth columns. The hidden effect is drawn from
 //! the catalog, plant side or human side, with parameters in realistic ranges ([`draw`]).
+//! The layout ([`Design`]) is the shared sessions' by default (32 reaches, 24 pulses);
+//! more pulses per angle make a session like a lab's reflex study, to measure how the
+//! diagnosis gains with them.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -160,8 +163,46 @@ pub struct Generated {
     pub hidden: Hidden,
 }
 
+/// How a generated session is laid out: its length, how many force pulses it carries
+/// and whether the arm has its motor noise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Design {
+    /// Reaches recorded.
+    pub trials: usize,
+    /// Pulses per angle (the protocol's 8 angles): 3 on the shared sessions. A lab
+    /// measuring a reflex against the arm's motor noise gives it more.
+    pub repetitions: u32,
+    /// The arm's signal-dependent motor noise; off, only the sensor noise and encoder
+    /// quantum remain: the same subject and effect, to see what a balance's model
+    /// leaves when the noise floor is gone.
+    pub motor_noise: bool,
+}
+
+impl Design {
+    /// The shared sessions' layout: 32 reaches of which 24 perturbed (8 angles × 3),
+    /// motor noise on.
+    pub const SHARED: Design = Design {
+        trials: 32,
+        repetitions: 3,
+        motor_noise: true,
+    };
+
+    /// `repetitions` pulses per angle in a session of the shared proportion (a quarter
+    /// of the reaches unperturbed): 9 gives 72 pulses in 96 reaches.
+    #[must_use]
+    pub const fn with_pulses(repetitions: u32) -> Design {
+        let perturbed = 8 * repetitions as usize;
+        Design {
+            trials: perturbed + perturbed / 3,
+            repetitions,
+            motor_noise: true,
+        }
+    }
+}
+
 /// Writes a session of `trials` reaches hiding `effect` (parameters and subject drawn
-/// from `seed`) under `out` (which must not exist or be empty).
+/// from `seed`) under `out` (which must not exist or be empty), with the shared
+/// sessions' 24 pulses.
 ///
 /// # Errors
 /// An unknown effect name, or the runtime's error.
@@ -171,31 +212,35 @@ pub fn generate(
     trials: usize,
     out: &Path,
 ) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
-    generate_with(effect, seed, trials, out, true)
+    let design = Design {
+        trials,
+        ..Design::SHARED
+    };
+    generate_design(effect, seed, &design, out)
 }
 
-/// [`generate`], with the arm's signal-dependent motor noise switched off when
-/// `motor_noise` is false (the sensor noise and encoder quantum stay): the same subject
-/// and effect, to see what a balance's model leaves when the noise floor is gone.
+/// [`generate`] with the session laid out by `design`. The effect and subject depend on
+/// `seed` alone, so one seed under two designs hides the same thing in the same arm.
 ///
 /// # Errors
 /// An unknown effect name, or the runtime's error.
-pub fn generate_with(
+pub fn generate_design(
     effect: &str,
     seed: u64,
-    trials: usize,
+    design: &Design,
     out: &Path,
-    motor_noise: bool,
 ) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let hidden = draw(effect, &mut rng)
         .ok_or_else(|| format!("unknown effect {effect:?}; known: {EFFECTS:?}"))?;
     let mut protocol = Protocol::builtin("reach-perturb")?;
     protocol.recording.rate_hz = 1000;
-    // The shared sessions' protocol: 32 reaches of which 24 perturbed (8 angles × 3),
-    // in random order. The hand balance needs the perturbed trials, and the first 32 of
-    // the seed's 100-trial schedule hold only ~8 of them.
+    // The pulses in random order among the reaches, all of them within the recorded
+    // ones (the first 32 of the seed's 100-trial schedule hold only ~8 of the 24): the
+    // hand balance needs the perturbed trials.
+    let trials = design.trials;
     let mut reach = protocol.reach();
+    reach.repetitions = design.repetitions;
     let perturbed = reach.repetitions as usize * reach.angles_deg.len();
     reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);
     protocol.reach = Some(reach);
@@ -203,7 +248,7 @@ pub fn generate_with(
     protocol.plant.effects = hidden.effects.clone();
     protocol.subjects.arm.stretch_reflex = hidden.stretch_reflex;
     protocol.subjects.first_is_nominal = false;
-    if !motor_noise {
+    if !design.motor_noise {
         protocol.subjects.arm.noise.activation_cv = 0.0;
     }
     let options = Options {

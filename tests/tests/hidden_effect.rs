@@ -24,7 +24,13 @@
 //! of 12–45 %: with 24 pulses the arm's motor noise leaves the reflex's residual only
 //! about twice the floor. Its test with the issue's 50 % is ignored: open work, not a
 //! pass; `hidden_stretch_reflex_is_named_under_motor_noise` asserts the name and both
-//! parameters, with a held-out gain of at least 25 %.
+//! parameters, with a held-out gain of at least 25 %. More pulses help, but not enough
+//! (the sweep's reflex row with `SWEEP_REPETITIONS`; the free damping of the baseline
+//! takes up the reflex's instantaneous part, so what a reflex model can add is its delay
+//! against the noise): with 72 pulses 20/20 named, 16/20 within 20 %, held-out gains
+//! 0.19–0.67 (median 0.35, 3/20 at 50 %); with 200 pulses 20/20, 17/20, 0.29–0.75
+//! (median 0.52, 11/20). `more_pulses_lower_the_hand_noise_floor` asserts that the
+//! floor is the pulses' noise.
 //! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README): none 20/20
 //! none; plant side 20/20 named each; grip 20/20; handle mass 20/20 named, 20/20
 //! within 20 %; reflex 19/20 named (12/20 parameters within 20 %), 1 none.
@@ -32,14 +38,21 @@
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
-use rigtwin_tests::generator::{EFFECTS, Generated, generate, generate_with};
+use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design};
 
-/// Reaches per session: the shared sessions' 32.
-const TRIALS: usize = 32;
+/// The shared layout without the arm's motor noise.
+const QUIET: Design = Design {
+    motor_noise: false,
+    ..Design::SHARED
+};
 
 fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
+    run_design(effect, seed, &Design::SHARED)
+}
+
+fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis) {
     let tmp = tempfile::tempdir().unwrap();
-    let g = generate(effect, seed, TRIALS, &tmp.path().join("out")).unwrap();
+    let g = generate_design(effect, seed, design, &tmp.path().join("out")).unwrap();
     let s = Session::read(&g.dir).unwrap();
     let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
     (g, d)
@@ -114,7 +127,7 @@ fn hidden_handle_mass_is_found() {
 }
 
 #[test]
-#[ignore = "open: a reflex is named in 19/20 sweep sessions, 12/20 with both parameters within 20 %, but its held-out gain stays at 12-45 % (the motor-noise floor of 24 pulses)"]
+#[ignore = "open: a reflex is named in 19/20 sweep sessions, 12/20 with both parameters within 20 %, but its held-out gain stays at 12-45 % with 24 pulses (the motor-noise floor); 3/20 reach 50 % with 72 pulses, 11/20 with 200"]
 fn hidden_stretch_reflex_is_found() {
     check("stretch-reflex", 21);
 }
@@ -125,7 +138,13 @@ fn hidden_stretch_reflex_is_found() {
 #[test]
 fn hand_cause_report_has_the_force_and_the_weighted_response() {
     let tmp = tempfile::tempdir().unwrap();
-    let g = generate("grip-compliance", 21, TRIALS, &tmp.path().join("out")).unwrap();
+    let g = generate_design(
+        "grip-compliance",
+        21,
+        &Design::SHARED,
+        &tmp.path().join("out"),
+    )
+    .unwrap();
     let a = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default()).unwrap();
     assert_eq!(a.diagnosis.cause, "grip-compliance");
     let files = write_report(&a, &tmp.path().join("report")).unwrap();
@@ -173,7 +192,7 @@ fn hidden_stretch_reflex_is_named_under_motor_noise() {
 #[test]
 fn noise_free_reflex_is_found_and_nothing_else() {
     let tmp = tempfile::tempdir().unwrap();
-    let g = generate_with("stretch-reflex", 2, TRIALS, &tmp.path().join("r"), false).unwrap();
+    let g = generate_design("stretch-reflex", 2, &QUIET, &tmp.path().join("r")).unwrap();
     let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
         .unwrap()
         .diagnosis;
@@ -194,11 +213,36 @@ fn noise_free_reflex_is_found_and_nothing_else() {
         d.parameters
     );
     assert!(d.gain.unwrap() >= 0.5, "gain {:?}", d.gain);
-    let g = generate_with("none", 2, TRIALS, &tmp.path().join("n"), false).unwrap();
+    let g = generate_design("none", 2, &QUIET, &tmp.path().join("n")).unwrap();
     let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
         .unwrap()
         .diagnosis;
     assert_eq!(d.cause, "none", "{:?}", d.parameters);
+}
+
+/// The hand balance's floor on a session hiding nothing is the arm's motor noise,
+/// which averages over the pulses: the same subject (seed 1000, the sweep's first) with
+/// 72 pulses instead of 24 must lower the weighted hand baseline's held-out NRMSE by
+/// about `√(24/72)` = 0.58. What does not average (the balance's own structural floor,
+/// 0.009 without motor noise, and the unperturbed reference shared by all pulses)
+/// raises the ratio: 0.60–0.69 measured on seeds 1000–1003, so 0.45–0.80 is asserted;
+/// outside it the floor would not be the pulses' noise. And more pulses, which give the
+/// replicate test more power, must not make it name a cause that is not there.
+#[test]
+fn more_pulses_lower_the_hand_noise_floor() {
+    let (_, few) = run("none", 1000);
+    let (_, many) = run_design("none", 1000, &Design::with_pulses(9));
+    let (a, b) = (
+        few.hand_baseline_nrmse.unwrap(),
+        many.hand_baseline_nrmse.unwrap(),
+    );
+    eprintln!(
+        "hand baseline NRMSE: 24 pulses {a:.4}, 72 pulses {b:.4}, ratio {:.3}",
+        b / a
+    );
+    assert_eq!(few.cause, "none", "{:?}", few.parameters);
+    assert_eq!(many.cause, "none", "{:?}", many.parameters);
+    assert!((0.45..=0.80).contains(&(b / a)), "ratio {}", b / a);
 }
 
 #[test]
@@ -209,6 +253,12 @@ fn sweep_confusion_matrix() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(20);
+    // `SWEEP_REPETITIONS=9` gives every session 9 pulses per angle (72 in 96 reaches).
+    let design = std::env::var("SWEEP_REPETITIONS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .filter(|n: &u32| *n > 0)
+        .map_or(Design::SHARED, Design::with_pulses);
     let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
         .ok()
         .map(|v| v.split(',').map(str::to_string).collect());
@@ -223,7 +273,7 @@ fn sweep_confusion_matrix() {
             continue;
         }
         for seed in 0..seeds {
-            let (g, d) = run(effect, 1000 + seed);
+            let (g, d) = run_design(effect, 1000 + seed, &design);
             let j = EFFECTS
                 .iter()
                 .position(|e| *e == d.cause)
