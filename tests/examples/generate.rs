@@ -4,6 +4,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/gen
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 2 /tmp/q --no-motor-noise
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/r --repetitions 9
+//! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/s --repetitions 9 --pulse 0.05,30
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -11,19 +12,23 @@
 //! empty); optional fourth: trials (default 32, or a third more than the pulses with
 //! `--repetitions`). `--no-motor-noise` switches the arm's motor noise off, keeping
 //! subject and effect; `--repetitions N` gives N pulses per angle (default 3, the
-//! shared sessions'). Prints the session folder and what it hides.
+//! shared sessions'); `--pulse SECONDS,NEWTONS` sets the force pulse's duration and
+//! amplitude (default the protocol's 0.15 s, 15 N; `Design::reflex_study` is
+//! `--repetitions 9 --pulse 0.05,30`). Prints the session folder and what it hides.
 
+use rigtwin_device::config::ForcePulseConfig;
 use rigtwin_tests::generator::{Design, EFFECTS, generate_design};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
     let mut motor_noise = true;
     let mut repetitions = None;
+    let mut pulse = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -37,6 +42,31 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                     return Err("--repetitions must be at least 1".into());
                 }
                 repetitions = Some(n);
+            }
+            "--pulse" => {
+                let v = args
+                    .next()
+                    .ok_or_else(|| format!("--pulse needs SECONDS,NEWTONS; {}", usage()))?;
+                let parts: Vec<&str> = v.split(',').collect();
+                let [d, a] = parts.as_slice() else {
+                    return Err(format!("--pulse {v:?}: want SECONDS,NEWTONS, e.g. 0.05,30").into());
+                };
+                let duration_s: f64 = d
+                    .parse()
+                    .map_err(|e| format!("--pulse duration {d:?}: {e}"))?;
+                let amplitude_n: f64 = a
+                    .parse()
+                    .map_err(|e| format!("--pulse amplitude {a:?}: {e}"))?;
+                if !(duration_s > 0.0 && amplitude_n >= 0.0) {
+                    return Err(format!(
+                        "--pulse {v:?}: the duration must be > 0 s and the amplitude >= 0 N"
+                    )
+                    .into());
+                }
+                pulse = Some(ForcePulseConfig {
+                    duration_s,
+                    amplitude_n,
+                });
             }
             s if s.starts_with("--") => {
                 return Err(format!("unexpected argument {s:?}; {}", usage()).into());
@@ -56,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         design.trials = t.parse().map_err(|e| format!("trials {t:?}: {e}"))?;
     }
     design.motor_noise = motor_noise;
+    design.pulse = pulse;
     let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);

@@ -7,9 +7,9 @@
 //! sensor noise and encoder quantum, recorded at 1 kHz as 4-tick block means like the
 //! shared emulated rig, without ground-truth columns. The hidden effect is drawn from
 //! the catalog, plant side or human side, with parameters in realistic ranges ([`draw`]).
-//! The layout ([`Design`]) is the shared sessions' by default (32 reaches, 24 pulses);
-//! more pulses per angle make a session like a lab's reflex study, to measure how the
-//! diagnosis gains with them.
+//! The layout ([`Design`]) is the shared sessions' by default (32 reaches, 24 pulses of
+//! 150 ms); more and briefer pulses make a session like a lab's reflex study
+//! ([`Design::reflex_study`]), to measure how the diagnosis gains with them.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -20,6 +20,7 @@ use rand_chacha::ChaCha8Rng;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options};
 use rigtwin_arm::params::StretchReflex;
+use rigtwin_device::config::ForcePulseConfig;
 use rigtwin_world::PlantEffects;
 use rigtwin_world::config::{
     ActuationDelay, ForceRipple, GripCompliance, HandleMass, RailFriction, SensorEffect,
@@ -164,8 +165,8 @@ pub struct Generated {
 }
 
 /// How a generated session is laid out: its length, how many force pulses it carries
-/// and whether the arm has its motor noise.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// and of what shape, and whether the arm has its motor noise.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Design {
     /// Reaches recorded.
     pub trials: usize,
@@ -176,6 +177,8 @@ pub struct Design {
     /// quantum remain: the same subject and effect, to see what a balance's model
     /// leaves when the noise floor is gone.
     pub motor_noise: bool,
+    /// The force pulse; `None` keeps the protocol's (000_*: 150 ms, 15 N).
+    pub pulse: Option<ForcePulseConfig>,
 }
 
 impl Design {
@@ -185,6 +188,7 @@ impl Design {
         trials: 32,
         repetitions: 3,
         motor_noise: true,
+        pulse: None,
     };
 
     /// `repetitions` pulses per angle in a session of the shared proportion (a quarter
@@ -196,6 +200,24 @@ impl Design {
             trials: perturbed + perturbed / 3,
             repetitions,
             motor_noise: true,
+            pulse: None,
+        }
+    }
+
+    /// A session laid out to measure a short-latency reflex, as reflex studies do: 72
+    /// brief pulses (9 per angle, in 96 reaches), 50 ms long instead of the seed's
+    /// 150 ms so that their power reaches the 10–30 Hz where a 15–35 ms delay turns the
+    /// response (`ωδ` towards π/2), and 30 N instead of 15 N to keep two thirds of the
+    /// seed pulse's impulse (1.5 against 2.25 N s for the same shape), so the hand moves
+    /// about as far.
+    #[must_use]
+    pub fn reflex_study() -> Design {
+        Design {
+            pulse: Some(ForcePulseConfig {
+                duration_s: 0.05,
+                amplitude_n: 30.0,
+            }),
+            ..Design::with_pulses(9)
         }
     }
 }
@@ -248,6 +270,9 @@ pub fn generate_design(
     protocol.plant.effects = hidden.effects.clone();
     protocol.subjects.arm.stretch_reflex = hidden.stretch_reflex;
     protocol.subjects.first_is_nominal = false;
+    if let Some(p) = &design.pulse {
+        protocol.controller.force_pulse = p.clone();
+    }
     if !design.motor_noise {
         protocol.subjects.arm.noise.activation_cv = 0.0;
     }

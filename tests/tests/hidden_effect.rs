@@ -13,31 +13,29 @@
 //! Human side (hand balance, 32 trials of which 24 perturbed at 4 pairs of opposite
 //! directions; full 2×2 `D` and `K`, fitted on the odd parts of each pair's mean
 //! responses, tested on the 12 repetitions, every row whitened in time and between the
-//! axes, the muscles without tone at half weight in the feedback shape,
-//! `hil/src/discrepancy/hand.rs`): `grip-compliance` is found with gains of 74–90 %
-//! (seed 21: k within 20 %). `handle-mass` is found with its mass within 20 % and
-//! explains 32–76 % of the hand balance's residual, median 59 %, at least half on 16 of
-//! 20 sweep seeds (seed 1003: 0.728 kg for 0.725, gain 0.63); the floor is the arm's
-//! motor noise (weighted hand baseline NRMSE 0.04–0.08 with no effect).
-//! `stretch-reflex` (15–35 ms, 100–250 N s/m) is named in 19 of 20 sweep sessions,
-//! never misnamed, 12 of 20 with both parameters within 20 %, but with held-out gains
-//! of 12–45 %: with 24 pulses the arm's motor noise leaves the reflex's residual only
-//! about twice the floor. Its test with the 50 % is ignored: open work, not a
-//! pass; `hidden_stretch_reflex_is_named_under_motor_noise` asserts the name and both
-//! parameters, with a held-out gain of at least 25 %. More pulses help, but not enough
-//! (the sweep's reflex row with `SWEEP_REPETITIONS`; the free damping of the baseline
-//! takes up the reflex's instantaneous part, so what a reflex model can add is its delay
-//! against the noise): with 72 pulses 20/20 named, 16/20 within 20 %, held-out gains
-//! 0.19–0.67 (median 0.35, 3/20 at 50 %); with 200 pulses 20/20, 17/20, 0.29–0.75
-//! (median 0.52, 11/20). `more_pulses_lower_the_hand_noise_floor` asserts that the
-//! floor is the pulses' noise.
-//! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README): none 20/20
-//! none; plant side 20/20 named each; grip 20/20; handle mass 20/20 named, 20/20
-//! within 20 %; reflex 19/20 named (12/20 parameters within 20 %), 1 none.
+//! axes by the noise read from the repetitions' spread, the muscles without tone at half
+//! weight in the feedback shape, `hil/src/discrepancy/hand.rs`): `grip-compliance` is
+//! found with gains of 78–91 % (seed 21: k within 20 %). `handle-mass` is found with its
+//! mass within 20 % and explains 65–89 % of the hand balance's residual (seed 1003:
+//! 0.741 kg for 0.725, gain 0.79); the floor is the arm's motor noise (weighted hand
+//! baseline NRMSE 0.04–0.08 with no effect). `stretch-reflex` (15–35 ms, 100–250 N s/m)
+//! is named in 20 of 20 sweep sessions, 14 with both parameters within 20 %, but on this
+//! layout its held-out gain is 0.16–0.65 (2 of 20 at 50 %): what a reflex model adds over
+//! the free damping is its delay's part, and 24 pulses of 150 ms carry little of it
+//! against the motor noise. A session laid out to measure a reflex
+//! ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) meets all three criteria on 19
+//! of 20 sweep seeds; `hidden_stretch_reflex_is_found` asserts them on it,
+//! `hidden_stretch_reflex_is_named_under_motor_noise` the name and parameters on the
+//! shared layout, `more_pulses_lower_the_hand_noise_floor` that the floor is the pulses'
+//! noise.
+//! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README; 462 s): every
+//! effect named in 20 of 20, none in 20 of 20 sessions hiding nothing; parameters within
+//! 20 % on 20/20 for each but rail friction (19) and the reflex (14).
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
+use rigtwin_device::config::ForcePulseConfig;
 use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design};
 
 /// The shared layout without the arm's motor noise.
@@ -63,7 +61,11 @@ fn check(effect: &str, seed: u64) {
 }
 
 fn check_with_gain(effect: &str, seed: u64, min_gain: f64) {
-    let (g, d) = run(effect, seed);
+    check_design(effect, seed, &Design::SHARED, min_gain);
+}
+
+fn check_design(effect: &str, seed: u64, design: &Design, min_gain: f64) {
+    let (g, d) = run_design(effect, seed, design);
     eprintln!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
     eprintln!("found  {} {:?} gain {:?}", d.cause, d.parameters, d.gain);
     eprintln!(
@@ -126,10 +128,22 @@ fn hidden_handle_mass_is_found() {
     check("handle-mass", 1003);
 }
 
+/// The criteria in full for a reflex, on a session laid out to measure one
+/// ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N), under the arm's motor noise.
+/// Seed 1000 is the sweep's first, not a chosen one: over the sweep's 20 seeds so laid
+/// out, 20 are named with both parameters within 20 % and 19 reach a held-out gain of
+/// 50 % (0.48–0.75). On the shared layout (24 pulses of 150 ms) the gain reaches 50 % on
+/// 2 of 20: see `hidden_stretch_reflex_is_named_under_motor_noise`.
 #[test]
-#[ignore = "open: a reflex is named in 19/20 sweep sessions, 12/20 with both parameters within 20 %, but its held-out gain stays at 12-45 % with 24 pulses (the motor-noise floor); 3/20 reach 50 % with 72 pulses, 11/20 with 200"]
 fn hidden_stretch_reflex_is_found() {
-    check("stretch-reflex", 21);
+    check_design("stretch-reflex", 1000, &Design::reflex_study(), 0.5);
+}
+
+/// The reflex study's more numerous, sharper pulses give the replicate test more power;
+/// a session so laid out that hides nothing must still name nothing (seed 1000).
+#[test]
+fn reflex_study_hiding_nothing_names_nothing() {
+    check_design("none", 1000, &Design::reflex_study(), 0.5);
 }
 
 /// A human-side cause's report: `diagnosis.md` with the cause's figure, the held-out
@@ -170,14 +184,14 @@ fn hand_cause_report_has_the_force_and_the_weighted_response() {
     }
 }
 
-/// With the arm's motor noise, the reflex is named (19 of 20 sweep seeds) and here, as
-/// on 12 of 20 sweep seeds, both parameters come out within 20 % (seed 24: 35 ms,
-/// 214 N s/m for 33 ms, 201 N s/m; t 6.1 against 2.91). It guards the feedback shape's
-/// muscle weights: with every muscle at weight 1 this session's delay came out at the
-/// grid's 50 ms edge. The held-out gain is held to 25 % instead of the 50 %
-/// (measured 0.37): with 32 trials the arm's motor noise leaves the weighted baseline an
-/// NRMSE floor of 0.04–0.08 on sessions hiding nothing, and the reflex's residual here
-/// is about twice that; the 50 % stays the ignored test above.
+/// On the shared layout (24 pulses of 150 ms) under the arm's motor noise, the reflex
+/// is named (20 of 20 sweep seeds) and here, as on 14 of 20 sweep seeds, both
+/// parameters come out within 20 % (seed 24: 35 ms, 208 N s/m for 33 ms, 201 N s/m).
+/// It guards the feedback shape's muscle weights: with every muscle at weight 1 this
+/// session's delay came out at the grid's 50 ms edge. The held-out gain is held to 25 %,
+/// not the 50 % (measured here 0.51): on this layout the sweep's gains are
+/// 0.16–0.65, 17 of 20 at least 0.25 and 2 of 20 at 0.5; the criteria in full
+/// are `hidden_stretch_reflex_is_found`'s, on a session laid out to measure a reflex.
 #[test]
 fn hidden_stretch_reflex_is_named_under_motor_noise() {
     check_with_gain("stretch-reflex", 24, 0.25);
@@ -225,7 +239,8 @@ fn noise_free_reflex_is_found_and_nothing_else() {
 /// 72 pulses instead of 24 must lower the weighted hand baseline's held-out NRMSE by
 /// about `√(24/72)` = 0.58. What does not average (the balance's own structural floor,
 /// 0.009 without motor noise, and the unperturbed reference shared by all pulses)
-/// raises the ratio: 0.60–0.69 measured on seeds 1000–1003, so 0.45–0.80 is asserted;
+/// raises the ratio: 0.65 here (0.60–0.69 on seeds 1000–1003 with the weighting read
+/// from the residual), so 0.45–0.80 is asserted;
 /// outside it the floor would not be the pulses' noise. And more pulses, which give the
 /// replicate test more power, must not make it name a cause that is not there.
 #[test]
@@ -254,11 +269,22 @@ fn sweep_confusion_matrix() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(20);
     // `SWEEP_REPETITIONS=9` gives every session 9 pulses per angle (72 in 96 reaches).
-    let design = std::env::var("SWEEP_REPETITIONS")
+    // `SWEEP_PULSE=0.05,30` gives them 50 ms, 30 N pulses (both: `Design::reflex_study`).
+    let mut design = std::env::var("SWEEP_REPETITIONS")
         .ok()
         .and_then(|v| v.parse().ok())
         .filter(|n: &u32| *n > 0)
         .map_or(Design::SHARED, Design::with_pulses);
+    if let Ok(v) = std::env::var("SWEEP_PULSE") {
+        let p: Vec<f64> = v
+            .split(',')
+            .map(|x| x.parse().expect("SWEEP_PULSE: SECONDS,NEWTONS"))
+            .collect();
+        design.pulse = Some(ForcePulseConfig {
+            duration_s: p[0],
+            amplitude_n: p[1],
+        });
+    }
     let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
         .ok()
         .map(|v| v.split(',').map(str::to_string).collect());

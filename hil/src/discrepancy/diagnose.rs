@@ -184,6 +184,10 @@ pub struct Diagnosis {
     /// The hand balance's row weighting ([`super::hand::Whitening`]): the correlation
     /// time filtered out, ms, and the matrix `W` between the axes, row-major.
     pub hand_weighting: BTreeMap<String, f64>,
+    /// Where the weighting's `W` comes from: `repetitions` (the spread of the
+    /// repetitions about their mean, the noise alone), `baseline residual` (sessions
+    /// without repetitions) or `time only`.
+    pub hand_weighting_source: Option<String>,
     /// The hand balance baseline's fitted parameters.
     pub hand_baseline: BTreeMap<String, f64>,
     /// Every judged candidate, best held-out gain first.
@@ -317,6 +321,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_baseline_nrmse: None,
         hand_baseline: BTreeMap::new(),
         hand_weighting: BTreeMap::new(),
+        hand_weighting_source: None,
         ranking: Vec::new(),
         runner_up: None,
         threshold: None,
@@ -435,6 +440,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
             let w = &h.whitening;
+            d.hand_weighting_source = Some(w.source.as_str().to_string());
             d.hand_weighting = [
                 ("noise_time_ms", w.noise_time_s * 1e3),
                 ("w11", w.axes[(0, 0)]),
@@ -601,7 +607,7 @@ fn evidence(
             "hand balance baseline ({} perturbed trials as {} {}, {} s windows, the arm's inertia from segment lengths): \
              D = [{:.1} {:.1}; {:.1} {:.1}] N s/m, K = [{:.0} {:.0}; {:.0} {:.0}] N/m, delayed feedback {:.0} ms with \
              gains {:.0} N/m, {:.1} N s/m (velocity gain at the arm's ratio); rows whitened for a {:.0} ms noise and \
-             between the axes; held-out NRMSE {:.4} of the whitened force",
+             between the axes (from the {}); held-out NRMSE {:.4} of the whitened force",
             d.hand_trials_used,
             h.responses.len(),
             match &h.replicates {
@@ -624,6 +630,7 @@ fn evidence(
             p("feedback_position_gain_n_per_m"),
             p("feedback_velocity_gain_n_s_per_m"),
             h.whitening.noise_time_s * 1e3,
+            h.whitening.source.as_str(),
             nrmse
         ));
     }

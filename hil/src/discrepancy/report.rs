@@ -74,7 +74,7 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
-            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {}), held-out NRMSE {:.4}",
+            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {} from the {}), held-out NRMSE {:.4}",
             d.hand_trials_used,
             d.hand_units,
             d.hand_test_units
@@ -89,6 +89,7 @@ pub fn table(d: &Diagnosis) -> String {
                 .copied()
                 .unwrap_or(f64::NAN),
             weighting_matrix(&d.hand_weighting),
+            d.hand_weighting_source.as_deref().unwrap_or("time only"),
             b
         );
     }
@@ -642,8 +643,10 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          repetitions of the pairs, one held out at a time; otherwise on responses averaged by direction, in \
          folds of directions. Every row of the hand balance is weighted (generalised least squares): filtered by \
          `1 − φ z⁻¹` in time, `φ = exp(−Δt/τ)` with τ the arm's motor-noise correlation time, and multiplied \
-         between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the baseline's residual \
-         so filtered; its NRMSEs and gains are those of the weighted force.",
+         between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the noise so filtered: \
+         the spread of the single repetitions' residuals about their pair's mean (what the model misses cancels \
+         there), or, without repetitions, the baseline's residual; its NRMSEs and gains are those of the weighted \
+         force.",
         d.folds,
         super::hand_signals::HAND_WINDOW_S
     );
