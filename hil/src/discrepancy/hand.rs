@@ -125,8 +125,10 @@
 //!   Savitzky–Golay position and velocity filters pass 0.99–0.96): held-out gains
 //!   unchanged (0.72–0.82), the delays 5–12 ms shorter, 2–9 ms under the truth;
 //! - damping tied to stiffness as in the muscles (`D = τ_d K`, `K` symmetric plus an
-//!   antisymmetric part): the baseline's NRMSE rose from 0.05–0.07 to 0.21–0.31 on sessions
-//!   hiding nothing (the arm's endpoint damping is not its muscles' alone);
+//!   antisymmetric part, one `τ_d` of 1/12 s): the baseline's NRMSE rose from
+//!   0.05–0.07 to 0.21–0.31 on sessions hiding nothing (the shipped arm's damping times
+//!   differ by muscle, 0.01–0.35 s, so its endpoint damping is no multiple of its
+//!   stiffness);
 //! - generating the arm with tone in its biarticular muscles (every weight 1): the
 //!   delays 4–22 ms long and the held-out gains lower (0.51–0.71), so the clipped
 //!   muscles are not what limits the fit.
@@ -331,9 +333,8 @@ pub trait HandCandidate: Sync + Send {
 /// is multiplied by `W` with `WᵀW ∝ Σ⁻¹`, `Σ` the covariance between the axes of the
 /// time-filtered noise ([`Whitening::from_repetitions`]; the baseline's residual,
 /// [`Whitening::fitted`], for sessions without repetitions). Regressors, target and
-/// normaliser alike: a linear law that
-/// holds for the rows holds for the weighted rows with the same coefficients, and the
-/// NRMSE is that of the weighted force.
+/// normaliser alike: a linear law that holds for the rows holds for the weighted rows
+/// with the same coefficients, and the NRMSE is that of the weighted force.
 ///
 /// Why: unweighted, the fit and the held-out error are dominated by the residual's low
 /// band and by its larger axis. The residual is the arm's motor noise, a leaky Brownian
@@ -378,16 +379,13 @@ impl Whitening {
         beta: &[f64],
         fb_delay_s: f64,
     ) -> Whitening {
-        let time = Whitening::in_time();
         let mut sigma = Matrix2::zeros();
         for r in units {
-            let rows = hand_fit_rows(c, r, s, beta, fb_delay_s, Some(&time));
-            for pair in rows.chunks_exact(2) {
-                let e = Vector2::new(pair[0].0 - pair[0].1, pair[1].0 - pair[1].1);
+            for e in time_filtered_residuals(c, r, s, beta, fb_delay_s) {
                 sigma += e * e.transpose();
             }
         }
-        Whitening::between_axes(sigma, WeightSource::Residual).unwrap_or(time)
+        Whitening::between_axes(sigma, WeightSource::Residual).unwrap_or_else(Whitening::in_time)
     }
 
     /// The time filter and `W` from the noise alone: the spread of the repetitions
@@ -405,13 +403,7 @@ impl Whitening {
         beta: &[f64],
         fb_delay_s: f64,
     ) -> Option<Whitening> {
-        let time = Whitening::in_time();
-        let residuals = |r: &HandResponse| -> Vec<Vector2<f64>> {
-            hand_fit_rows(c, r, s, beta, fb_delay_s, Some(&time))
-                .chunks_exact(2)
-                .map(|p| Vector2::new(p[0].0 - p[0].1, p[1].0 - p[1].1))
-                .collect()
-        };
+        let residuals = |r: &HandResponse| time_filtered_residuals(c, r, s, beta, fb_delay_s);
         let means: Vec<(f64, Vec<Vector2<f64>>)> = averaged
             .iter()
             .map(|a| (a.angle_deg, residuals(a)))
@@ -449,6 +441,22 @@ impl Whitening {
             ..Whitening::in_time()
         })
     }
+}
+
+/// The residual `(x, y)` per evaluated sample of coefficients `beta` of `c` at setting
+/// `s` on `r`, through the time filter alone: what the weighting between the axes is
+/// read from.
+fn time_filtered_residuals(
+    c: &dyn HandCandidate,
+    r: &HandResponse,
+    s: usize,
+    beta: &[f64],
+    fb_delay_s: f64,
+) -> Vec<Vector2<f64>> {
+    hand_fit_rows(c, r, s, beta, fb_delay_s, Some(&Whitening::in_time()))
+        .chunks_exact(2)
+        .map(|p| Vector2::new(p[0].0 - p[0].1, p[1].0 - p[1].1))
+        .collect()
 }
 
 /// Where the hand balance's weighting between the axes comes from.
