@@ -16,8 +16,7 @@
 //! amplitude (default the protocol's 0.15 s, 15 N; `Design::reflex_study` is
 //! `--repetitions 9 --pulse 0.05,30`). Prints the session folder and what it hides.
 
-use rigtwin_device::config::ForcePulseConfig;
-use rigtwin_tests::generator::{Design, EFFECTS, generate_design};
+use rigtwin_tests::generator::{Design, EFFECTS, generate_design, parse_pulse};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
@@ -47,26 +46,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                 let v = args
                     .next()
                     .ok_or_else(|| format!("--pulse needs SECONDS,NEWTONS; {}", usage()))?;
-                let parts: Vec<&str> = v.split(',').collect();
-                let [d, a] = parts.as_slice() else {
-                    return Err(format!("--pulse {v:?}: want SECONDS,NEWTONS, e.g. 0.05,30").into());
-                };
-                let duration_s: f64 = d
-                    .parse()
-                    .map_err(|e| format!("--pulse duration {d:?}: {e}"))?;
-                let amplitude_n: f64 = a
-                    .parse()
-                    .map_err(|e| format!("--pulse amplitude {a:?}: {e}"))?;
-                if !(duration_s > 0.0 && amplitude_n >= 0.0) {
-                    return Err(format!(
-                        "--pulse {v:?}: the duration must be > 0 s and the amplitude >= 0 N"
-                    )
-                    .into());
-                }
-                pulse = Some(ForcePulseConfig {
-                    duration_s,
-                    amplitude_n,
-                });
+                pulse = Some(parse_pulse(&v).map_err(|e| format!("--{e}"))?);
             }
             s if s.starts_with("--") => {
                 return Err(format!("unexpected argument {s:?}; {}", usage()).into());

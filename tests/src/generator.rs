@@ -222,6 +222,35 @@ impl Design {
     }
 }
 
+/// A force pulse from `SECONDS,NEWTONS` (e.g. `0.05,30`), as the example's `--pulse`
+/// and the sweep's `SWEEP_PULSE` take it.
+///
+/// # Errors
+/// Not two numbers, a duration not above 0 s or an amplitude below 0 N, said with `v`.
+pub fn parse_pulse(v: &str) -> Result<ForcePulseConfig, String> {
+    let parts: Vec<&str> = v.split(',').collect();
+    let [d, a] = parts.as_slice() else {
+        return Err(format!("pulse {v:?}: want SECONDS,NEWTONS, e.g. 0.05,30"));
+    };
+    let duration_s: f64 = d
+        .trim()
+        .parse()
+        .map_err(|e| format!("pulse duration {d:?}: {e}"))?;
+    let amplitude_n: f64 = a
+        .trim()
+        .parse()
+        .map_err(|e| format!("pulse amplitude {a:?}: {e}"))?;
+    if !(duration_s > 0.0 && amplitude_n >= 0.0) {
+        return Err(format!(
+            "pulse {v:?}: the duration must be > 0 s and the amplitude >= 0 N"
+        ));
+    }
+    Ok(ForcePulseConfig {
+        duration_s,
+        amplitude_n,
+    })
+}
+
 /// Writes a session of `trials` reaches hiding `effect` (parameters and subject drawn
 /// from `seed`) under `out` (which must not exist or be empty), with the shared
 /// sessions' 24 pulses.
@@ -290,4 +319,28 @@ pub fn generate_design(
         .map(|s| s.dir.clone())
         .ok_or("the rehearsal wrote no session")?;
     Ok(Generated { dir, hidden })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reflex study's pulse reads back exactly; a missing field, a zero duration, a
+    /// negative amplitude or a word are refused with the value in the message.
+    #[test]
+    fn pulse_reads_seconds_and_newtons() {
+        assert_eq!(
+            parse_pulse("0.05,30"),
+            Ok(ForcePulseConfig {
+                duration_s: 0.05,
+                amplitude_n: 30.0
+            })
+        );
+        for bad in ["0.05", "0,30", "0.05,-1", "short,30", "0.05,30,1"] {
+            let Err(e) = parse_pulse(bad) else {
+                panic!("{bad:?} was accepted");
+            };
+            assert!(e.contains("pulse"), "{e}");
+        }
+    }
 }

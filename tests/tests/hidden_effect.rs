@@ -35,8 +35,7 @@
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
-use rigtwin_device::config::ForcePulseConfig;
-use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design};
+use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design, parse_pulse};
 
 /// The shared layout without the arm's motor noise.
 const QUIET: Design = Design {
@@ -276,14 +275,7 @@ fn sweep_confusion_matrix() {
         .filter(|n: &u32| *n > 0)
         .map_or(Design::SHARED, Design::with_pulses);
     if let Ok(v) = std::env::var("SWEEP_PULSE") {
-        let p: Vec<f64> = v
-            .split(',')
-            .map(|x| x.parse().expect("SWEEP_PULSE: SECONDS,NEWTONS"))
-            .collect();
-        design.pulse = Some(ForcePulseConfig {
-            duration_s: p[0],
-            amplitude_n: p[1],
-        });
+        design.pulse = Some(parse_pulse(&v).unwrap_or_else(|e| panic!("SWEEP_PULSE: {e}")));
     }
     let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
         .ok()
