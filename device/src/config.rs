@@ -442,6 +442,12 @@ pub struct SafetyConfig {
     /// An encoder step larger than this between consecutive ticks trips a fault, m
     /// (default 1 mm per 250 µs = 4 m/s, far above any hand speed). > 0.
     pub encoder_jump_m: f64,
+    /// An active tick may follow the previous one after at most this many skipped ticks
+    /// (deadlines a real-time loop missed and skipped instead of bursting to catch up);
+    /// a longer gap trips a clock-skip fault. 0: every skipped tick trips. The default
+    /// is 0, the lock-step contract; a real-time protocol sets a few ticks (4 = 1 ms at
+    /// 4 kHz), as a rig's real-time layer tolerates a few overruns but not a stall.
+    pub max_consecutive_misses: u32,
 }
 
 impl Default for SafetyConfig {
@@ -456,6 +462,7 @@ impl Default for SafetyConfig {
             nonfinite_force_ticks: 4,
             stale_force_ticks: None,
             encoder_jump_m: 0.001,
+            max_consecutive_misses: 0,
         }
     }
 }

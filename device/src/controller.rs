@@ -496,6 +496,8 @@ impl Controller {
         if self.mode == Mode::Active
             && let Some(last) = self.last_tick
             && !consecutive
+            && !(now > last
+                && now.0 - last.0 - 1 <= u64::from(self.config.safety.max_consecutive_misses))
         {
             self.trip(
                 now,

@@ -1,7 +1,7 @@
 //! The safety layer. It is always on, in every mode: it clamps motor force, pushes the
 //! virtual dynamics back from soft workspace walls, and trips a latched fault on an
 //! e-stop, an I/O error, a non-finite or frozen force sensor, an encoder jump, a speed
-//! or position beyond its limit, or a missed tick. A trip is recorded as a typed
+//! or position beyond its limit, or more missed ticks in a row than allowed. A trip is recorded as a typed
 //! [`SafetyEvent`] in a fixed-capacity [`EventLog`] (no allocation), and the command
 //! written at the tripping tick, and every tick after it until reset, is zero.
 
@@ -62,7 +62,8 @@ pub enum TripReason {
         /// The position, m.
         position_m: f64,
     },
-    /// An active tick did not follow the previous one.
+    /// An active tick came after more skipped ticks than
+    /// `safety.max_consecutive_misses` allows (or did not come after the previous one).
     ClockSkip {
         /// The tick that was due.
         expected: Tick,

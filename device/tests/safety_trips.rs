@@ -263,6 +263,44 @@ fn a_missed_tick_while_active_trips() {
     );
 }
 
+/// A real-time loop that misses deadlines skips ahead instead of bursting: with
+/// `max_consecutive_misses = 4`, gaps of up to 4 skipped ticks keep the controller active
+/// and commanding, the first gap of 5 trips it, at that tick, with the command zero.
+#[test]
+fn skipped_ticks_within_the_allowance_do_not_trip() {
+    let mut rig = MockRig::default();
+    rig.frame.force_raw_n = [5.0, 0.0];
+    let mut config = ControllerConfig::default();
+    config.safety.max_consecutive_misses = 4;
+    let mut c = Controller::new(config).unwrap();
+    c.tick(&mut rig, Tick(0));
+    c.activate().unwrap();
+    let mut n = 1;
+    for gap in [0, 1, 4, 2, 4] {
+        n += gap;
+        let r = c.tick(&mut rig, Tick(n));
+        assert_eq!(
+            r.mode,
+            Mode::Active,
+            "gap of {gap} skipped ticks at tick {n}"
+        );
+        n += 1;
+    }
+    let r = c.tick(&mut rig, Tick(n + 5));
+    assert_eq!(r.mode, Mode::Fault);
+    assert_eq!(r.command_n, [0.0, 0.0]);
+    assert_eq!(
+        c.events().last(),
+        Some(SafetyEvent {
+            tick: Tick(n + 5),
+            reason: TripReason::ClockSkip {
+                expected: Tick(n),
+                got: Tick(n + 5)
+            }
+        })
+    );
+}
+
 #[test]
 fn motor_force_is_clamped_to_the_limit() {
     // The reference runs away from carts held at 0 by the mock: the PD demand grows
