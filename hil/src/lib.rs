@@ -1,5 +1,6 @@
 //! rigtwin — the runtime and command line.
 
+pub mod cosim;
 pub mod discrepancy;
 pub mod protocol;
 pub mod rehearse;

@@ -55,6 +55,7 @@ fn header() -> Manifest {
             extra: Default::default(),
         },
         sim: None,
+        timing: None,
         trials: Vec::new(),
     }
 }

@@ -31,6 +31,7 @@ fn meta_of(e: &rigtwin::session::TrialEntry) -> TrialMeta {
 /// Writes `s` into `dir` with `write_trial`.
 fn rewrite(s: &Session, dir: &Path) {
     let header = Manifest {
+        timing: None,
         trials: Vec::new(),
         ..s.manifest.clone()
     };
@@ -124,6 +125,7 @@ fn header(rate_hz: f64) -> Manifest {
             model: None,
             extra,
         }),
+        timing: None,
         trials: Vec::new(),
     }
 }

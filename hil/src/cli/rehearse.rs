@@ -24,11 +24,17 @@ Examples:
   rigtwin rehearse my-protocol.toml --out runs/pilot --json
   rigtwin rehearse hil/protocols/reach-perturb.toml --rerun save=r.rrd   # then: rerun r.rrd
   rigtwin rehearse reach-perturb --model model.toml  # with `rigtwin diagnose --write-model`'s effects
+  rigtwin rehearse reach-perturb --realtime --max-trials 4 --rt-priority 80 --lock-memory
 
 Shipped protocols (hil/protocols/, also built in by name): reach-perturb (000_*),
 hold-sinusoid (001_*), calibration-rig (001_* Appendix B).
 Output: <out>/S01/ (session.toml, trials/*.csv), ..., <out>/report.md, <out>/report.json.
-The same protocol and seed give byte-identical sessions, whatever --jobs is.")]
+The same protocol and seed give byte-identical sessions, whatever --jobs is.
+--realtime paces every tick to the wall clock at the control rate (4 kHz) on one thread,
+skips missed deadlines instead of bursting (the plant moves on under the held command;
+`safety.max_consecutive_misses` trips the controller past that many in a row), and
+writes the wake-up latency and loop time (p50, p99, p99.9, max, missed deadlines) to the
+report and to each session's [timing].")]
 pub struct Args {
     /// Protocol file (TOML), or the name of a shipped protocol.
     pub protocol: PathBuf,
@@ -57,6 +63,24 @@ pub struct Args {
     /// Print the report as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Pace every tick to the wall clock at the control rate (real time) instead of lock
+    /// step; one trial at a time.
+    #[arg(long)]
+    pub realtime: bool,
+
+    /// With --realtime: run the loop's thread under SCHED_FIFO at this priority (1-99).
+    #[arg(long, value_name = "N", requires = "realtime", value_parser = clap::value_parser!(u8).range(1..=99))]
+    pub rt_priority: Option<u8>,
+
+    /// With --realtime: lock the process's memory in RAM (mlockall).
+    #[arg(long, requires = "realtime")]
+    pub lock_memory: bool,
+
+    /// With --realtime: spin on the clock this many microseconds before each deadline
+    /// instead of sleeping (removes the kernel's wake-up latency; costs that much CPU).
+    #[arg(long, value_name = "US", default_value_t = 0, requires = "realtime")]
+    pub spin_us: u64,
 
     /// Extended model (`rigtwin diagnose --write-model`): its plant effects and stretch
     /// reflex replace the protocol's before rehearsing.
@@ -147,8 +171,25 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     #[cfg(not(feature = "rerun"))]
     let observer: &mut dyn rehearse::RehearsalObserver = &mut ();
-    let rehearsal = rehearse::rehearse_observed(&protocol, &options, &progress, &cancel, observer)
-        .with_context(|| format!("rehearsing {} into {}", protocol.name, out_dir.display()))?;
+    let pacing = if args.realtime {
+        if args.lock_memory
+            && let Err(note) = rigtwin::cosim::rt::lock_memory()
+        {
+            eprintln!("{note}");
+        }
+        rehearse::Pacing::RealTime(rehearse::RealTime {
+            spin: std::time::Duration::from_micros(args.spin_us),
+            fifo_priority: args.rt_priority,
+        })
+    } else {
+        rehearse::Pacing::LockStep
+    };
+    let rehearsal =
+        rehearse::rehearse_paced(&protocol, &options, pacing, &progress, &cancel, observer)
+            .with_context(|| format!("rehearsing {} into {}", protocol.name, out_dir.display()))?;
+    for note in &rehearsal.realtime_notes {
+        eprintln!("{note}");
+    }
     bar.finish_and_clear();
     let rep = report::build(&rehearsal);
     report::write(&rep, &out_dir)?;

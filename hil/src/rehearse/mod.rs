@@ -23,7 +23,7 @@
 //! <out>/S02/...
 //! ```
 
-pub mod record;
+pub use crate::cosim::record;
 pub mod seed;
 pub mod trial;
 
@@ -39,10 +39,11 @@ use rand_chacha::ChaCha8Rng;
 use rigtwin_arm::muscles::MUSCLES;
 use rigtwin_device::config::LawKind;
 
+use crate::cosim::WallClock;
 use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
 use crate::session::{
     Amplitude, Device, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind, SessionError,
-    SessionWriter, SimInfo, Source, Subject, Trial, TrialEntry, TrialKind, TrialMeta,
+    SessionWriter, SimInfo, Source, Subject, Timing, Trial, TrialEntry, TrialKind, TrialMeta,
 };
 use record::{Block, Layout, ch};
 pub use trial::{Extremes, OnsetTruth, TrialPlan, TrialTask};
@@ -90,6 +91,12 @@ pub enum RehearseError {
     /// The run was cancelled.
     #[error("cancelled")]
     Cancelled,
+    /// A co-simulation step failed.
+    #[error(transparent)]
+    CoSim(#[from] crate::cosim::CoSimError),
+    /// The real-time clock could not be used.
+    #[error("real-time clock: {0}")]
+    Clock(String),
 }
 
 /// How to run a rehearsal.
@@ -106,6 +113,26 @@ pub struct Options {
     /// Run at most this many trials per subject (the first ones of the schedule), for
     /// quick checks; `None` runs the protocol as written.
     pub max_trials: Option<usize>,
+}
+
+/// How a rehearsal's trials are paced.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Pacing {
+    /// As fast as the machine goes, trials in parallel: byte-identical sessions.
+    #[default]
+    LockStep,
+    /// At the control rate on the wall clock, one trial after the other on one thread
+    /// ([`crate::cosim::WallClock`]); each session records its timing.
+    RealTime(RealTime),
+}
+
+/// The real-time settings of a paced rehearsal.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RealTime {
+    /// Spin on the clock for this long before each deadline instead of sleeping.
+    pub spin: std::time::Duration,
+    /// Run the loop's thread under SCHED_FIFO at this priority (1–99).
+    pub fifo_priority: Option<u8>,
 }
 
 /// Progress, reported after every written trial.
@@ -182,6 +209,8 @@ pub struct SubjectResult {
     pub dir: PathBuf,
     /// Its trials in order.
     pub trials: Vec<TrialResult>,
+    /// How the real-time loop kept its clock over the session (real-time pacing only).
+    pub timing: Option<Timing>,
 }
 
 /// A finished rehearsal.
@@ -201,6 +230,10 @@ pub struct Rehearsal {
     pub wall_s: f64,
     /// Worker threads used.
     pub jobs: usize,
+    /// The pacing.
+    pub pacing: Pacing,
+    /// What the real-time set-up could not do (e.g. SCHED_FIFO refused), one line each.
+    pub realtime_notes: Vec<String>,
 }
 
 /// A trial just written, as a [`RehearsalObserver`] sees it: everything in memory.
@@ -364,6 +397,7 @@ fn manifest(protocol: &Protocol, subject: &VirtualSubject, session_seed: u64) ->
             }),
             extra: BTreeMap::new(),
         }),
+        timing: None,
         trials: Vec::new(),
     }
 }
@@ -375,6 +409,8 @@ struct Done {
     result: TrialResult,
     activations_n: Option<Vec<[f64; MUSCLES]>>,
     simulated_s: f64,
+    /// The real-time clock's timing of the session so far (real-time pacing only).
+    timing: Option<Timing>,
 }
 
 fn run_trial(
@@ -382,10 +418,21 @@ fn run_trial(
     subject: &VirtualSubject,
     session_seed: u64,
     plan: &TrialPlan,
+    clock: Option<&mut WallClock>,
 ) -> Result<Done, RehearseError> {
     let rate = f64::from(protocol.recording.rate_hz);
     let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
-    let sim = trial::simulate(protocol, subject, session_seed, plan, true)?;
+    let (sim, timing) = match clock {
+        Some(clock) => {
+            clock.restart();
+            let sim = trial::simulate_on(protocol, subject, session_seed, plan, true, clock)?;
+            (sim, Some(clock.summary()))
+        }
+        None => (
+            trial::simulate(protocol, subject, session_seed, plan, true)?,
+            None,
+        ),
+    };
     let n_ticks = trial::trial_ticks(protocol);
     let mut simulated_s = n_ticks as f64 / TICK_HZ as f64;
     let layout = Layout {
@@ -482,6 +529,7 @@ fn run_trial(
         result,
         activations_n,
         simulated_s,
+        timing,
     })
 }
 
@@ -579,9 +627,43 @@ pub fn rehearse_observed(
     cancel: &AtomicBool,
     observer: &mut dyn RehearsalObserver,
 ) -> Result<Rehearsal, RehearseError> {
+    rehearse_paced(
+        protocol,
+        options,
+        Pacing::LockStep,
+        progress,
+        cancel,
+        observer,
+    )
+}
+
+/// [`rehearse_observed`] with the trials paced by `pacing`. Real time runs one worker
+/// (the loop's thread, under SCHED_FIFO if asked) whatever `options.jobs` says; the
+/// unperturbed twins that give the report its ground truth run in lock step between
+/// trials.
+///
+/// # Errors
+/// [`RehearseError`] from the output folder, the clock, the models or the writer.
+pub fn rehearse_paced(
+    protocol: &Protocol,
+    options: &Options,
+    pacing: Pacing,
+    progress: &(dyn Fn(Progress) + Sync),
+    cancel: &AtomicBool,
+    observer: &mut dyn RehearsalObserver,
+) -> Result<Rehearsal, RehearseError> {
     let started = Instant::now();
     prepare_out(&options.out_dir)?;
-    let jobs = options.jobs.max(1);
+    let realtime = match pacing {
+        Pacing::LockStep => None,
+        Pacing::RealTime(rt) => Some(rt),
+    };
+    let jobs = if realtime.is_some() {
+        1
+    } else {
+        options.jobs.max(1)
+    };
+    let notes = std::sync::Mutex::new(Vec::<String>::new());
     let subjects: Vec<VirtualSubject> = (1..=options.subjects.max(1))
         .map(|i| protocol.subjects.draw(options.seed, i))
         .collect();
@@ -606,18 +688,36 @@ pub fn rehearse_observed(
         let mut writer = SessionWriter::create(&dir, manifest)?;
         let mut results = Vec::with_capacity(plans.len());
         let next = AtomicUsize::new(0);
+        let mut timing = None;
         let (tx, rx) = mpsc::channel::<(usize, Result<Done, RehearseError>)>();
         let outcome: Result<(), RehearseError> = std::thread::scope(|scope| {
             for _ in 0..jobs.min(plans.len()).max(1) {
                 let tx = tx.clone();
                 let next = &next;
+                let notes = &notes;
                 scope.spawn(move || {
+                    let mut clock = match realtime.map(|rt| realtime_clock(protocol, rt)) {
+                        None => None,
+                        Some(Ok((clock, note))) => {
+                            if let (Some(n), Ok(mut all)) = (note, notes.lock()) {
+                                if !all.contains(&n) {
+                                    all.push(n);
+                                }
+                            }
+                            Some(clock)
+                        }
+                        Some(Err(e)) => {
+                            let _ = tx.send((0, Err(e)));
+                            return;
+                        }
+                    };
                     loop {
                         let i = next.fetch_add(1, Ordering::SeqCst);
                         if i >= plans.len() || cancel.load(Ordering::SeqCst) {
                             break;
                         }
-                        let r = run_trial(protocol, subject, options.seed, &plans[i]);
+                        let r =
+                            run_trial(protocol, subject, options.seed, &plans[i], clock.as_mut());
                         if tx.send((i, r)).is_err() {
                             break;
                         }
@@ -644,7 +744,11 @@ pub fn rehearse_observed(
                         mut result,
                         activations_n,
                         simulated_s: s,
+                        timing: t,
                     } = d;
+                    if t.is_some() {
+                        timing = t;
+                    }
                     let entry = writer.write_trial(meta, &table)?;
                     result.sha256 = entry.sha256.map(|h| h.to_string()).unwrap_or_default();
                     observer.trial_written(&WrittenTrial {
@@ -672,12 +776,16 @@ pub fn rehearse_observed(
             Ok(())
         });
         outcome?;
+        if let Some(t) = timing {
+            writer.set_timing(t)?;
+        }
         let written = writer.finish()?;
         observer.session_finished(subject, &dir, &written);
         out.push(SubjectResult {
             subject: subject.clone(),
             dir,
             trials: results,
+            timing,
         });
     }
     Ok(Rehearsal {
@@ -688,7 +796,26 @@ pub fn rehearse_observed(
         simulated_s,
         wall_s: started.elapsed().as_secs_f64(),
         jobs,
+        pacing,
+        realtime_notes: notes.into_inner().unwrap_or_default(),
     })
+}
+
+/// The wall clock of a real-time worker, on a thread under SCHED_FIFO if asked; the
+/// note says what the OS refused (the run goes on without it).
+fn realtime_clock(
+    protocol: &Protocol,
+    rt: RealTime,
+) -> Result<(WallClock, Option<String>), RehearseError> {
+    let rate = protocol
+        .controller
+        .control_rate()
+        .unwrap_or(rigtwin_device::Rate::CONTROL);
+    let clock = WallClock::new(rate, rt.spin).map_err(|e| RehearseError::Clock(e.to_string()))?;
+    let note = rt
+        .fifo_priority
+        .and_then(|p| crate::cosim::rt::set_fifo_priority(p).err());
+    Ok((clock, note))
 }
 
 /// Format version written (for the report).

@@ -257,6 +257,18 @@ pub struct Report {
     pub hold: Option<HoldSummary>,
     /// Hold kinds: the Piovesan windowed regression.
     pub piovesan: Option<PiovesanSummary>,
+    /// Real-time pacing: how each subject's loop kept its clock (empty in lock step).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub timing: Vec<SubjectTiming>,
+}
+
+/// The real-time timing of one subject's session.
+#[derive(Debug, Clone, Serialize)]
+pub struct SubjectTiming {
+    /// Subject id.
+    pub subject: String,
+    /// The loop's clock over the session.
+    pub timing: crate::session::Timing,
 }
 
 fn nrmse_of(est: &[[f64; 2]], truth: &[[f64; 2]]) -> f64 {
@@ -502,6 +514,16 @@ pub fn build(r: &Rehearsal) -> Report {
         parameters,
         hold,
         piovesan,
+        timing: r
+            .subjects
+            .iter()
+            .filter_map(|s| {
+                s.timing.map(|timing| SubjectTiming {
+                    subject: s.subject.id.clone(),
+                    timing,
+                })
+            })
+            .collect(),
     }
 }
 

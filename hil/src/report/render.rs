@@ -313,6 +313,9 @@ pub fn summary_text(r: &Report) -> String {
             let _ = writeln!(out, "windowed regression failed: {e}");
         }
     }
+    if !r.timing.is_empty() {
+        out.push_str(&timing_text(&r.timing));
+    }
     out
 }
 
@@ -347,6 +350,41 @@ pub fn markdown(r: &Report) -> String {
             dx,
             dy,
             row.trip.clone().unwrap_or_default(),
+        ]);
+    }
+    out.push_str(&t.render());
+    out
+}
+
+/// The real-time timing table: wake-up latency and loop time per subject, µs.
+#[must_use]
+pub fn timing_text(timing: &[super::SubjectTiming]) -> String {
+    let mut out = String::from(
+        "\nReal-time timing (wake-up latency: start of a tick after its deadline; loop time: one tick's work)\n",
+    );
+    let mut t = Table::new(&[
+        "subject",
+        "ticks",
+        "missed (per 1e5)",
+        "longest run",
+        "wake p50 / p99 / p99.9 / max",
+        "loop p50 / p99 / p99.9 / max",
+    ]);
+    let p = |q: &crate::session::Percentiles| {
+        format!(
+            "{:.1} / {:.1} / {:.1} / {:.1} µs",
+            q.p50_us, q.p99_us, q.p999_us, q.max_us
+        )
+    };
+    for s in timing {
+        let tm = &s.timing;
+        t.row(vec![
+            s.subject.clone(),
+            tm.ticks.to_string(),
+            format!("{} ({:.1})", tm.missed_deadlines, tm.misses_per_1e5()),
+            tm.max_consecutive_misses.to_string(),
+            p(&tm.wake_latency),
+            p(&tm.loop_time),
         ]);
     }
     out.push_str(&t.render());

@@ -17,8 +17,8 @@ use std::ops::Range;
 use std::path::{Component, Path, PathBuf};
 use std::str::FromStr;
 
-use serde::Deserialize;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
 use super::error::SessionError;
@@ -44,8 +44,57 @@ pub struct Manifest {
     pub subject: Subject,
     /// `[sim]`: present on simulator output.
     pub sim: Option<SimInfo>,
+    /// `[timing]`: present on sessions recorded in real time (an extension of version 1
+    /// that readers of the spec skip as an unknown table).
+    pub timing: Option<Timing>,
     /// `[[trial]]`, in file order.
     pub trials: Vec<TrialEntry>,
+}
+
+/// A distribution of durations, µs.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Percentiles {
+    /// Median, µs.
+    pub p50_us: f64,
+    /// 99th percentile, µs.
+    pub p99_us: f64,
+    /// 99.9th percentile, µs.
+    pub p999_us: f64,
+    /// Largest, µs.
+    pub max_us: f64,
+}
+
+/// `[timing]`: how the real-time loop that recorded the session kept its clock.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Timing {
+    /// Period of the control clock, µs (250 at 4 kHz).
+    pub period_us: f64,
+    /// Ticks the loop ran.
+    pub ticks: u64,
+    /// Deadlines missed: ticks the loop skipped (the plant moved on under the held
+    /// command; every recorded sample is still there).
+    pub missed_deadlines: u64,
+    /// Longest run of consecutive missed deadlines.
+    pub max_consecutive_misses: u64,
+    /// Wake-up latency: how late after its deadline each tick started.
+    pub wake_latency: Percentiles,
+    /// Loop time: from one wake-up to the next request for a tick.
+    pub loop_time: Percentiles,
+}
+
+impl Timing {
+    /// Missed deadlines per 10⁵ deadlines.
+    #[must_use]
+    pub fn misses_per_1e5(&self) -> f64 {
+        let due = self.ticks + self.missed_deadlines;
+        if due == 0 {
+            0.0
+        } else {
+            self.missed_deadlines as f64 * 1e5 / due as f64
+        }
+    }
 }
 
 /// Where the data came from.
@@ -400,6 +449,7 @@ struct RawManifest {
     device: RawDevice,
     subject: Subject,
     sim: Option<SimInfo>,
+    timing: Option<Timing>,
     #[serde(default)]
     trial: Vec<RawTrial>,
 }
@@ -741,6 +791,7 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<(Manifest, Vec<EntryLines
         device,
         subject: raw.subject,
         sim: raw.sim,
+        timing: raw.timing,
         trials,
     };
     Ok((manifest, lines))
@@ -954,6 +1005,23 @@ impl Manifest {
                 let _ = writeln!(out, "model = {}", string(m));
             }
             extra(&mut out, &sim.extra);
+        }
+        if let Some(t) = &self.timing {
+            let _ = writeln!(out, "\n[timing]");
+            let _ = writeln!(out, "period_us = {}", float(t.period_us));
+            let _ = writeln!(out, "ticks = {}", t.ticks);
+            let _ = writeln!(out, "missed_deadlines = {}", t.missed_deadlines);
+            let _ = writeln!(out, "max_consecutive_misses = {}", t.max_consecutive_misses);
+            for (name, p) in [("wake_latency", t.wake_latency), ("loop_time", t.loop_time)] {
+                let _ = writeln!(
+                    out,
+                    "{name} = {{ p50_us = {}, p99_us = {}, p999_us = {}, max_us = {} }}",
+                    float(p.p50_us),
+                    float(p.p99_us),
+                    float(p.p999_us),
+                    float(p.max_us)
+                );
+            }
         }
         for t in &self.trials {
             out.push('\n');

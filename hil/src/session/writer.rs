@@ -266,6 +266,16 @@ impl SessionWriter {
         &self.dir
     }
 
+    /// Sets the manifest's `[timing]` (a real-time recording's clock) and writes the
+    /// manifest again.
+    ///
+    /// # Errors
+    /// [`SessionError`] if the manifest cannot be written.
+    pub fn set_timing(&mut self, timing: crate::session::Timing) -> Result<(), SessionError> {
+        self.manifest.timing = Some(timing);
+        self.write_manifest()
+    }
+
     fn write_manifest(&self) -> Result<(), SessionError> {
         write_atomic(
             &self.dir.join(MANIFEST_FILE),

@@ -12,6 +12,7 @@
 use rigtwin_arm::muscles::MUSCLES;
 use rigtwin_device::TickReport;
 
+use super::PlantSample;
 use crate::session::{Column, Trial};
 
 /// Number of channels in a [`Block`]: twelve x/y pairs and the six muscle activations.
@@ -91,18 +92,10 @@ impl Recorder {
         }
     }
 
-    /// Adds one tick: the controller's report, the plant's truth and the arm's muscle
-    /// activations (N; zeros without an arm). Allocation-free: the rows were reserved by
-    /// [`Recorder::new`].
-    pub fn push(
-        &mut self,
-        r: &TickReport,
-        true_pos: nalgebra::Vector2<f64>,
-        true_vel: nalgebra::Vector2<f64>,
-        hand_n: [f64; 2],
-        acc: [f64; 2],
-        activations_n: &[f64; MUSCLES],
-    ) {
+    /// Adds one tick: the controller's report and the plant's ground truth of the tick
+    /// (zeros where the plant does not know it). Allocation-free: the rows were reserved
+    /// by [`Recorder::new`].
+    pub fn push(&mut self, r: &TickReport, truth: &PlantSample) {
         let pairs: [[f64; 2]; ch::ACTIVATION / 2] = [
             r.position_m,
             r.force_n,
@@ -110,10 +103,10 @@ impl Recorder {
             r.velocity_m_per_s,
             r.ref_position_m,
             r.command_n,
-            [true_pos.x, true_pos.y],
-            [true_vel.x, true_vel.y],
-            hand_n,
-            acc,
+            truth.position_m,
+            truth.velocity_m_per_s,
+            truth.hand_n,
+            truth.acceleration_m_per_s2,
             r.pert_position_m,
             r.anchor_position_m,
         ];
@@ -121,7 +114,10 @@ impl Recorder {
             self.sum[2 * i] += p[0];
             self.sum[2 * i + 1] += p[1];
         }
-        for (s, a) in self.sum[ch::ACTIVATION..].iter_mut().zip(activations_n) {
+        for (s, a) in self.sum[ch::ACTIVATION..]
+            .iter_mut()
+            .zip(&truth.activations_n)
+        {
             *s += a;
         }
         self.count += 1;
@@ -203,7 +199,7 @@ pub fn to_trial(rows: &[Block], rate_hz: f64, layout: Layout) -> Trial {
 /// Time of tick `k` on the table clock of blocks of `div` ticks, s.
 #[must_use]
 pub fn tick_time_s(k: u64, div: u64) -> f64 {
-    (k as f64 - (div.max(1) as f64 - 1.0) / 2.0) / super::TICK_HZ as f64
+    (k as f64 - (div.max(1) as f64 - 1.0) / 2.0) / f64::from(rigtwin_device::Rate::CONTROL.hz())
 }
 
 #[cfg(test)]
@@ -223,10 +219,12 @@ mod tests {
     #[test]
     fn activations_are_block_means() {
         let mut rec = Recorder::new(4, 10);
-        let zero = nalgebra::Vector2::zeros();
         for k in 0..10 {
-            let a: [f64; MUSCLES] = std::array::from_fn(|m| (k * (m + 1)) as f64);
-            rec.push(&TickReport::default(), zero, zero, [0.0; 2], [0.0; 2], &a);
+            let truth = PlantSample {
+                activations_n: std::array::from_fn(|m| (k * (m + 1)) as f64),
+                ..PlantSample::default()
+            };
+            rec.push(&TickReport::default(), &truth);
         }
         let rows = rec.finish();
         assert_eq!(rows.len(), 2);
