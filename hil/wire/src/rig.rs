@@ -3,7 +3,9 @@
 //!
 //! `read(now)` takes every pending datagram from the transport, counts and drops the
 //! bad, late and repeated ones ([`LinkCounters`]), and keeps the newest sensor frame by
-//! sequence number. It then answers, in this order:
+//! sequence number. A transport error ends the drain and is returned (its `kind()`
+//! says which, e.g. `Disconnected` for a refused port); frames taken before it are
+//! kept. Otherwise it answers, in this order:
 //! 1. a gap of more than `max_gap` consecutive lost frames in this read →
 //!    [`WireError::GapTooLarge`] (`ErrorKind::Other`; the frame is still kept);
 //! 2. no frame ever → [`WireError::NoFrameYet`] (`ErrorKind::Disconnected`);
@@ -146,20 +148,30 @@ impl<T: Transport> RigIo for WireRig<T> {
     fn read(&mut self, now: Tick) -> Result<SensorFrame, WireError> {
         let mut worst_gap = 0u32;
         let mut fresh = false;
-        while let Some(n) = self.transport.try_recv(&mut self.buf)? {
-            let bytes = self.buf.get(..n).unwrap_or(&[]);
-            if let Some((Datagram::Sensor(s), missing)) = self.inbox.admit(bytes, Expect::Sensor) {
-                worst_gap = worst_gap.max(missing);
-                self.newest = Some(s);
-                fresh = true;
+        let drained = loop {
+            match self.transport.try_recv(&mut self.buf) {
+                Ok(Some(n)) => {
+                    let bytes = self.buf.get(..n).unwrap_or(&[]);
+                    if let Some((Datagram::Sensor(s), missing)) =
+                        self.inbox.admit(bytes, Expect::Sensor)
+                    {
+                        worst_gap = worst_gap.max(missing);
+                        self.newest = Some(s);
+                        fresh = true;
+                    }
+                }
+                Ok(None) => break Ok(()),
+                Err(e) => break Err(e),
             }
-        }
+        };
+        // Frames taken before a transport error still count as arrived now.
         if fresh {
             self.newest_at = now;
             if let Some(echo) = self.newest.and_then(|s| s.echo_tick) {
                 self.round_trip = Some(now.0.saturating_sub(echo.0));
             }
         }
+        drained?;
         if worst_gap > self.limits.max_gap {
             return Err(WireError::GapTooLarge {
                 missing: worst_gap,
