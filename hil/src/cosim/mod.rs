@@ -26,6 +26,7 @@ pub mod outcome;
 pub mod plant;
 pub mod record;
 pub mod rt;
+pub mod wired;
 
 use rigtwin_device::{Controller, PerturbationStatus, Tick, TickReport};
 
@@ -108,6 +109,7 @@ impl<P: Plant> CoSim<P> {
     /// [`CoSimError`] if the driver's transitions are refused or the plant diverges.
     pub fn step(&mut self, now: Tick) -> Result<TickReport, CoSimError> {
         self.driver.before_tick(&mut self.controller, now)?;
+        self.plant.before_tick(self.controller.mode());
         let report = self.controller.tick(&mut self.plant, now);
         track(&mut self.extremes, &report);
         if let Some(angle_deg) = self.driver.push_onset(&report, now) {

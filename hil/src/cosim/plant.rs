@@ -38,6 +38,12 @@ pub struct PlantSample {
 
 /// What the loop needs of a plant beyond the rig's I/O.
 pub trait Plant: RigIo {
+    /// Before the controller's tick: the controller's mode, for a plant that tells it to
+    /// the other side (a wire carries it with every command). Nothing by default.
+    fn before_tick(&mut self, mode: rigtwin_device::Mode) {
+        let _ = mode;
+    }
+
     /// Ends tick `now`, after the controller wrote its command (`report`): the plant
     /// moves on by one period under the command it holds. Returns the ground truth of
     /// `now` where the plant knows it (a simulated plant), `None` where it does not (a

@@ -121,6 +121,35 @@ pub fn build(
     plan: &TrialPlan,
     with_perturbation: bool,
 ) -> Result<CoSim<SimPlant>, RehearseError> {
+    let p = parts(protocol, subject, session_seed, plan, with_perturbation)?;
+    Ok(CoSim::new(p.controller, p.driver, p.plant, p.recorder))
+}
+
+/// The parts of one trial's co-simulation, for a runner that puts something between the
+/// controller and the plant (a wire).
+#[derive(Debug)]
+pub struct Parts {
+    /// The protocol's controller (the trial's imposed-motion axis set).
+    pub controller: Controller,
+    /// Activation and the trial's perturbations.
+    pub driver: TrialDriver,
+    /// The rig and the subject, seeded from the trial's streams.
+    pub plant: SimPlant,
+    /// A recorder sized for the trial.
+    pub recorder: Recorder,
+}
+
+/// The parts [`build`] bundles.
+///
+/// # Errors
+/// As [`build`].
+pub fn parts(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plan: &TrialPlan,
+    with_perturbation: bool,
+) -> Result<Parts, RehearseError> {
     let seed = |s: Stream| trial_seed(session_seed, subject.index, plan.index, s);
     let mut ctl_cfg = protocol.controller.clone();
     let rate_div = (TICK_HZ / u64::from(protocol.recording.rate_hz)).max(1);
@@ -174,13 +203,12 @@ pub fn build(
         let mut rng = ChaCha8Rng::seed_from_u64(seed(Stream::Schedule));
         pushes = rigtwin_device::perturb::schedule::position_schedule(slots, &mut rng);
     }
-    let recorder = Recorder::new(rate_div, trial_ticks(protocol));
-    Ok(CoSim::new(
+    Ok(Parts {
         controller,
-        TrialDriver::new(pulse, pushes),
+        driver: TrialDriver::new(pulse, pushes),
         plant,
-        recorder,
-    ))
+        recorder: Recorder::new(rate_div, trial_ticks(protocol)),
+    })
 }
 
 /// Where the handle starts, what holds it and what the subject does in `plan`'s trial;
