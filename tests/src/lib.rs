@@ -2,6 +2,7 @@
 
 pub mod generator;
 
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -29,4 +30,25 @@ pub fn rehearse_one(
         max_trials,
     };
     rehearse::rehearse(protocol, &options, &|_| {}, &AtomicBool::new(false))
+}
+
+/// Every file under `dir`, by `/`-separated path relative to it, with its bytes.
+///
+/// # Errors
+/// The first I/O error met.
+pub fn files(dir: &Path) -> std::io::Result<BTreeMap<String, Vec<u8>>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d)? {
+            let p = e?.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if let Ok(rel) = p.strip_prefix(dir) {
+                let rel = rel.to_string_lossy().replace('\\', "/");
+                out.insert(rel, std::fs::read(&p)?);
+            }
+        }
+    }
+    Ok(out)
 }

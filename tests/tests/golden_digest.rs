@@ -18,24 +18,11 @@ use rigtwin::session::Sha256;
 
 /// The SHA-256 of every file under `dir`, by relative path.
 fn digests(dir: &Path) -> BTreeMap<String, String> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p
-                    .strip_prefix(dir)
-                    .unwrap()
-                    .to_string_lossy()
-                    .replace('\\', "/");
-                out.insert(rel, Sha256::of(&std::fs::read(&p).unwrap()).to_string());
-            }
-        }
-    }
-    out
+    rigtwin_tests::files(dir)
+        .unwrap()
+        .into_iter()
+        .map(|(k, v)| (k, Sha256::of(&v).to_string()))
+        .collect()
 }
 
 /// Rehearses the first `trials` trials of `protocol` (one subject, seed 42) and checks

@@ -10,22 +10,8 @@ use std::sync::atomic::AtomicBool;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options};
 
-/// Every file under `dir`, by relative path.
 fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-                out.insert(rel, std::fs::read(&p).unwrap());
-            }
-        }
-    }
-    out
+    rigtwin_tests::files(dir).unwrap()
 }
 
 fn run(p: &Protocol, dir: &Path, jobs: usize, subjects: u32) {

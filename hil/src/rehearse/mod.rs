@@ -699,10 +699,10 @@ pub fn rehearse_paced(
                     let mut clock = match realtime.map(|rt| realtime_clock(protocol, rt)) {
                         None => None,
                         Some(Ok((clock, note))) => {
-                            if let (Some(n), Ok(mut all)) = (note, notes.lock()) {
-                                if !all.contains(&n) {
-                                    all.push(n);
-                                }
+                            if let (Some(n), Ok(mut all)) = (note, notes.lock())
+                                && !all.contains(&n)
+                            {
+                                all.push(n);
                             }
                             Some(clock)
                         }
