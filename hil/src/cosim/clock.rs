@@ -26,8 +26,9 @@ use crate::session::{Percentiles, Timing};
 /// What paces a co-simulation loop.
 pub trait Clock {
     /// Waits for tick `next` (the loop's next tick) and returns the tick that is due:
-    /// `next`, or a later one if deadlines were missed.
-    fn wait(&mut self, next: Tick) -> Tick;
+    /// `next`, or a later one up to `last` (the run's final tick) if deadlines were
+    /// missed.
+    fn wait(&mut self, next: Tick, last: Tick) -> Tick;
 }
 
 /// Lock step: every tick is due at once. Nothing is measured.
@@ -35,7 +36,7 @@ pub trait Clock {
 pub struct LockStep;
 
 impl Clock for LockStep {
-    fn wait(&mut self, next: Tick) -> Tick {
+    fn wait(&mut self, next: Tick, _last: Tick) -> Tick {
         next
     }
 }
@@ -144,7 +145,7 @@ impl WallClock {
 }
 
 impl Clock for WallClock {
-    fn wait(&mut self, next: Tick) -> Tick {
+    fn wait(&mut self, next: Tick, last: Tick) -> Tick {
         let Ok(t) = now_ns() else {
             // CLOCK_MONOTONIC was readable in `new`; it does not go away. Should it, run
             // the tick unpaced rather than stop a loop that holds a subject.
@@ -162,7 +163,7 @@ impl Clock for WallClock {
         }
         let woke = now_ns().unwrap_or(deadline);
         // The latest tick whose deadline has passed.
-        let due = next.0.max((woke - start) / self.period_ns);
+        let due = next.0.max(((woke - start) / self.period_ns).min(last.0));
         let skipped = due - next.0;
         self.missed += skipped;
         if skipped > 0 {

@@ -172,7 +172,7 @@ pub fn run<P: Plant, C: Clock>(
 ) -> Result<(), CoSimError> {
     let mut n = 0;
     while n < n_ticks {
-        let due = clock.wait(Tick(n)).0.min(n_ticks - 1).max(n);
+        let due = clock.wait(Tick(n), Tick(n_ticks - 1)).0.max(n);
         for k in n..due {
             cosim.hold(Tick(k))?;
         }
