@@ -31,7 +31,6 @@ fn meta_of(e: &rigtwin::session::TrialEntry) -> TrialMeta {
 /// Writes `s` into `dir` with `write_trial`.
 fn rewrite(s: &Session, dir: &Path) {
     let header = Manifest {
-        timing: None,
         trials: Vec::new(),
         ..s.manifest.clone()
     };
