@@ -46,7 +46,7 @@ pub enum CoSimError {
     /// A perturbation could not be armed.
     #[error("perturbation: {0}")]
     Perturbation(#[from] rigtwin_device::perturb::ArmError),
-    /// The arm model refused its parameters or state.
+    /// The arm model refused its parameters, task or state.
     #[error("arm: {0}")]
     Arm(#[from] rigtwin_arm::ArmError),
     /// The plant refused its configuration or diverged.

@@ -62,18 +62,6 @@ pub enum RehearseError {
     /// The controller refused its configuration.
     #[error("controller: {0}")]
     Controller(#[from] rigtwin_device::ConfigError),
-    /// A lifecycle transition was refused.
-    #[error("controller lifecycle: {0}")]
-    Lifecycle(#[from] rigtwin_device::LifecycleError),
-    /// A perturbation could not be armed.
-    #[error("perturbation: {0}")]
-    Perturbation(#[from] rigtwin_device::perturb::ArmError),
-    /// The arm model refused its parameters or task.
-    #[error("arm: {0}")]
-    Arm(#[from] rigtwin_arm::ArmError),
-    /// The plant refused its configuration or diverged.
-    #[error("plant: {0}")]
-    World(#[from] rigtwin_world::WorldError),
     /// Writing the session failed.
     #[error("session: {0}")]
     Session(#[from] SessionError),
@@ -91,7 +79,9 @@ pub enum RehearseError {
     /// The run was cancelled.
     #[error("cancelled")]
     Cancelled,
-    /// A co-simulation step failed.
+    /// A co-simulation could not be built or a step failed: a lifecycle transition or a
+    /// perturbation refused, the arm or the plant refusing its configuration, or the
+    /// plant diverging.
     #[error(transparent)]
     CoSim(#[from] crate::cosim::CoSimError),
     /// The real-time clock could not be used.
@@ -230,8 +220,6 @@ pub struct Rehearsal {
     pub wall_s: f64,
     /// Worker threads used.
     pub jobs: usize,
-    /// The pacing.
-    pub pacing: Pacing,
     /// What the real-time set-up could not do (e.g. SCHED_FIFO refused), one line each.
     pub realtime_notes: Vec<String>,
 }
@@ -796,7 +784,6 @@ pub fn rehearse_paced(
         simulated_s,
         wall_s: started.elapsed().as_secs_f64(),
         jobs,
-        pacing,
         realtime_notes: notes.into_inner().unwrap_or_default(),
     })
 }

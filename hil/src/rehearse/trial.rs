@@ -17,7 +17,7 @@ use rigtwin_world::{Attachment, Grasp};
 use super::record::Recorder;
 use super::seed::{Stream, trial_seed};
 use super::{RehearseError, TICK_HZ};
-use crate::cosim::{self, Clock, CoSim, LockStep, SimPlant, TrialDriver};
+use crate::cosim::{self, Clock, CoSim, CoSimError, LockStep, SimPlant, TrialDriver};
 pub use crate::cosim::{Extremes, OnsetTruth, Simulated};
 use crate::protocol::{HoldCondition, Protocol, ProtocolKind, VirtualSubject};
 
@@ -156,24 +156,28 @@ pub fn parts(
     let (start_m, attachment, task) = trial_task(protocol, subject, plan, &mut ctl_cfg);
     let rig_cfg = protocol.plant.rig_config(start_m, attachment);
     let human = match task {
-        Some(task) => Some(Human::new(
-            subject.arm.clone(),
-            task,
-            HumanConfig {
-                shoulder_rig_m: subject.shoulder_m,
-                neural_divisor: 4,
-                trial_index: plan.index,
-                co_contraction_level: subject.co_contraction_level,
-            },
-            ChaCha8Rng::seed_from_u64(seed(Stream::Arm)),
-        )?),
+        Some(task) => Some(
+            Human::new(
+                subject.arm.clone(),
+                task,
+                HumanConfig {
+                    shoulder_rig_m: subject.shoulder_m,
+                    neural_divisor: 4,
+                    trial_index: plan.index,
+                    co_contraction_level: subject.co_contraction_level,
+                },
+                ChaCha8Rng::seed_from_u64(seed(Stream::Arm)),
+            )
+            .map_err(CoSimError::from)?,
+        ),
         None => None,
     };
     let plant = SimPlant::new(
         rig_cfg,
         ChaCha8Rng::seed_from_u64(seed(Stream::Plant)),
         human,
-    )?;
+    )
+    .map_err(CoSimError::from)?;
     let controller = Controller::new(ctl_cfg)?;
     let pulse = match plan.task {
         TrialTask::Reach { angle_deg: Some(a) } if with_perturbation => {
