@@ -43,6 +43,12 @@ impl PerturbationStatus {
         matches!(self, PerturbationStatus::Running { .. })
     }
 
+    /// True at the tick the perturbation started: running, with its onset at `now`.
+    #[must_use]
+    pub fn started_at(self, now: Tick) -> bool {
+        self == PerturbationStatus::Running { onset: now }
+    }
+
     /// The onset tick of the running or last perturbation, if any.
     #[must_use]
     pub fn onset(self) -> Option<Tick> {

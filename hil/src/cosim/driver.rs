@@ -67,9 +67,9 @@ impl TrialDriver {
     /// perturbation that started at it.
     #[must_use]
     pub fn push_onset(&self, report: &TickReport, now: Tick) -> Option<f64> {
-        match report.position_perturbation {
-            PerturbationStatus::Running { onset } if onset == now => Some(self.armed_angle_deg),
-            _ => None,
-        }
+        report
+            .position_perturbation
+            .started_at(now)
+            .then_some(self.armed_angle_deg)
     }
 }

@@ -28,7 +28,7 @@ pub mod record;
 pub mod rt;
 pub mod wired;
 
-use rigtwin_device::{Controller, PerturbationStatus, Tick, TickReport};
+use rigtwin_device::{Controller, Tick, TickReport};
 
 pub use clock::{Clock, ClockError, LockStep, WallClock};
 pub use driver::TrialDriver;
@@ -115,7 +115,7 @@ impl<P: Plant> CoSim<P> {
         if let Some(angle_deg) = self.driver.push_onset(&report, now) {
             self.push_onsets.push((now.0, angle_deg));
         }
-        if matches!(report.force_pulse, PerturbationStatus::Running { onset } if onset == now) {
+        if report.force_pulse.started_at(now) {
             self.pulse_onset = Some(now.0);
         }
         self.finish_tick(now, &report)?;

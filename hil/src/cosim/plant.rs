@@ -12,7 +12,7 @@ use rand_chacha::ChaCha8Rng;
 use rigtwin_arm::Human;
 use rigtwin_arm::dynamics::JointState;
 use rigtwin_arm::muscles::MUSCLES;
-use rigtwin_device::{MotorCommand, PerturbationStatus, RigIo, SensorFrame, Tick, TickReport};
+use rigtwin_device::{MotorCommand, RigIo, SensorFrame, Tick, TickReport};
 use rigtwin_world::{RigConfig, SimRig, WorldError};
 
 use super::{CoSimError, OnsetTruth};
@@ -163,9 +163,8 @@ impl Plant for SimPlant {
         now: Tick,
         report: &TickReport,
     ) -> Result<Option<PlantSample>, CoSimError> {
-        let onset =
-            matches!(report.force_pulse, PerturbationStatus::Running { onset } if onset == now);
-        self.advance_with(now, onset).map(Some)
+        self.advance_with(now, report.force_pulse.started_at(now))
+            .map(Some)
     }
 
     fn has_muscles(&self) -> bool {
