@@ -16,7 +16,11 @@
 
 use core::fmt;
 
+use rigtwin_device::Tick;
+
 use crate::datagram::{self, Datagram, DecodeError};
+use crate::error::WireError;
+use crate::transport::Transport;
 
 /// Counts of one receiving end, plus what it sent. All counts are datagrams.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -210,7 +214,8 @@ pub(crate) enum Expect {
     Command,
 }
 
-/// The receiving half of an end: decode, check direction and sequence, count.
+/// The receiving half of an end: decode, check direction and sequence, count (the
+/// sending half counts through [`send_counted`]).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Inbox {
     pub(crate) tracker: SequenceTracker,
@@ -257,4 +262,32 @@ impl Inbox {
         c.accepted += 1;
         Some((d, missing))
     }
+}
+
+/// Sends one datagram of an end and counts it: `sent`, or `unsent` when the transport
+/// could not take it (a full buffer, a peer not yet known), which loses the datagram
+/// without an error; any other transport error is returned.
+pub(crate) fn send_counted<T: Transport>(
+    transport: &mut T,
+    counters: &mut LinkCounters,
+    now: Tick,
+    bytes: &[u8],
+) -> Result<(), WireError> {
+    match transport.send(now, bytes) {
+        Ok(()) => counters.sent += 1,
+        Err(e) if e.is_unsent() => counters.unsent += 1,
+        Err(e) => return Err(e.into()),
+    }
+    Ok(())
+}
+
+/// The watchdog limit both ends take: at least one tick.
+pub(crate) fn check_stale_ticks(stale_ticks: u32) -> Result<(), WireError> {
+    if stale_ticks == 0 {
+        return Err(WireError::BadLimit {
+            name: "stale_ticks",
+            min: 1,
+        });
+    }
+    Ok(())
 }

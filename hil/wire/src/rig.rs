@@ -38,7 +38,7 @@ use rigtwin_device::{Mode, MotorCommand, RigIo, SensorFrame, Tick};
 use crate::datagram::{CommandDatagram, Datagram, SensorDatagram};
 use crate::error::WireError;
 use crate::faults::MAX_DATAGRAM;
-use crate::link::{Expect, Inbox, LinkCounters};
+use crate::link::{Expect, Inbox, LinkCounters, check_stale_ticks, send_counted};
 use crate::transport::Transport;
 
 /// The controller end's limits.
@@ -78,12 +78,7 @@ pub struct WireRig<T: Transport> {
 impl<T: Transport> WireRig<T> {
     /// The controller's end over `transport`; `stale_ticks` must be at least 1.
     pub fn new(transport: T, limits: RigLimits) -> Result<WireRig<T>, WireError> {
-        if limits.stale_ticks == 0 {
-            return Err(WireError::BadLimit {
-                name: "stale_ticks",
-                min: 1,
-            });
-        }
+        check_stale_ticks(limits.stale_ticks)?;
         Ok(WireRig {
             transport,
             limits,
@@ -199,12 +194,6 @@ impl<T: Transport> RigIo for WireRig<T> {
         }
         .encode()?;
         self.next_sequence = self.next_sequence.wrapping_add(1);
-        let c = &mut self.inbox.counters;
-        match self.transport.send(now, &bytes) {
-            Ok(()) => c.sent += 1,
-            Err(e) if e.is_unsent() => c.unsent += 1,
-            Err(e) => return Err(e.into()),
-        }
-        Ok(())
+        send_counted(&mut self.transport, &mut self.inbox.counters, now, &bytes)
     }
 }
