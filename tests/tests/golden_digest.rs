@@ -10,10 +10,8 @@
 
 use std::collections::BTreeMap;
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, Options};
 use rigtwin::session::Sha256;
 
 /// The SHA-256 of every file under `dir`, by relative path.
@@ -31,14 +29,7 @@ fn check(protocol: &str, trials: usize, want: &[(&str, &str)]) {
     let p = Protocol::builtin(protocol).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("out");
-    let opts = Options {
-        subjects: 1,
-        seed: 42,
-        out_dir: dir.clone(),
-        jobs: 2,
-        max_trials: Some(trials),
-    };
-    rehearse::rehearse(&p, &opts, &|_| {}, &AtomicBool::new(false)).unwrap();
+    rigtwin_tests::rehearse_one(&p, 42, &dir, 2, Some(trials)).unwrap();
     let got = digests(&dir);
     if std::env::var_os("GOLDEN_PRINT").is_some() {
         for (k, v) in &got {
