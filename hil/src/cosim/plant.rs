@@ -69,9 +69,6 @@ pub trait Plant: RigIo {
 pub struct SimPlant {
     rig: SimRig,
     human: Option<Human>,
-    activations_n: [f64; MUSCLES],
-    last_hand_n: [f64; 2],
-    last_acc: [f64; 2],
 }
 
 impl SimPlant {
@@ -88,9 +85,6 @@ impl SimPlant {
         Ok(SimPlant {
             rig: SimRig::new(config, rng)?,
             human,
-            activations_n: [0.0; MUSCLES],
-            last_hand_n: [0.0; 2],
-            last_acc: [0.0; 2],
         })
     }
 
@@ -123,24 +117,25 @@ impl SimPlant {
         let mut onset_truth = None;
         if let (Some(h), Some(state)) = (self.human.as_mut(), self.rig.arm_state()) {
             let tau = h.update(now.0, &state);
-            self.activations_n = h.activations_n();
             self.rig.set_arm_torques(tau)?;
             if onset {
                 onset_truth = Some(onset_truth_at(h, &state, &self.rig, now.0)?);
             }
         }
+        // The rig's truth is still the last step's (zeros before the first).
+        let last = self.rig.truth();
         let sample = PlantSample {
             position_m: [p.x, p.y],
             velocity_m_per_s: [v.x, v.y],
-            hand_n: self.last_hand_n,
-            acceleration_m_per_s2: self.last_acc,
-            activations_n: self.activations_n,
+            hand_n: last.hand_on_handle_n,
+            acceleration_m_per_s2: last.handle_acc_m_per_s2,
+            activations_n: self
+                .human
+                .as_ref()
+                .map_or([0.0; MUSCLES], Human::activations_n),
             onset: onset_truth,
         };
         self.rig.step()?;
-        let truth = self.rig.truth();
-        self.last_hand_n = truth.hand_on_handle_n;
-        self.last_acc = truth.handle_acc_m_per_s2;
         Ok(sample)
     }
 }
