@@ -23,6 +23,7 @@ fn codec(c: &mut Criterion) {
     let s = SensorDatagram {
         sequence: 41,
         tick: Tick(123_456),
+        trial: 7,
         frame: SensorFrame {
             encoder_counts: [-12_345, 67_890],
             force_raw_n: [1.25, -3.5],
@@ -34,6 +35,7 @@ fn codec(c: &mut Criterion) {
     let m = CommandDatagram {
         sequence: 40,
         tick: Tick(99),
+        trial: 7,
         command: MotorCommand {
             force_n: [4.0, -2.0],
         },

@@ -13,7 +13,9 @@
 //!
 //! A sensor frame is [`SENSOR_LEN`] (64) bytes and a motor command [`COMMAND_LEN`] (48)
 //! bytes; `hil/docs/wire.md` has both bodies byte by byte. Padding and the reserved flag
-//! bits are sent as zero and ignored on receipt.
+//! bits are sent as zero and ignored on receipt. Both bodies carry the 1-based `trial`
+//! id the sender is running (0: none), so a plant that runs a protocol knows which
+//! trial to set up and a controller knows when the plant has set it up.
 //!
 //! Contracts:
 //! - [`decode`] never panics: any byte slice gives a datagram or a [`DecodeError`].
@@ -52,6 +54,9 @@ pub struct SensorDatagram {
     pub sequence: u32,
     /// The plant tick at which the sensors were sampled.
     pub tick: Tick,
+    /// The trial the plant is running (the session's 1-based trial id), 0 when it runs
+    /// none (a rig that knows no trials, or a plant between trials).
+    pub trial: u16,
     /// Encoder counts and raw force (N), e-stop, in rig units.
     pub frame: SensorFrame,
     /// `true` when the plant's command watchdog has zeroed the motor force.
@@ -68,6 +73,9 @@ pub struct CommandDatagram {
     pub sequence: u32,
     /// The controller tick at which it was written.
     pub tick: Tick,
+    /// The trial the controller is running (1-based trial id), 0 for a controller that
+    /// runs none; a plant that runs a protocol sets up the trial named here.
+    pub trial: u16,
     /// Force per axis, N, rig frame. Always finite.
     pub command: MotorCommand,
     /// The controller's lifecycle mode; the plant applies force only in `Active`.
@@ -231,6 +239,10 @@ impl Reader<'_> {
         self.take::<1>()[0]
     }
 
+    fn u16(&mut self) -> u16 {
+        u16::from_le_bytes(self.take())
+    }
+
     fn u64(&mut self) -> u64 {
         u64::from_le_bytes(self.take())
     }
@@ -270,7 +282,8 @@ impl SensorDatagram {
         } else {
             0
         };
-        w.put(&[flags, 0, 0]);
+        w.put(&[flags]);
+        w.put(&self.trial.to_le_bytes());
         w.put(&tick_to_wire(self.echo_tick).to_le_bytes());
         buf
     }
@@ -293,7 +306,8 @@ impl CommandDatagram {
         for f in self.command.force_n {
             w.put(&f.to_le_bytes());
         }
-        w.put(&[mode_to_wire(self.mode), 0, 0, 0]);
+        w.put(&[mode_to_wire(self.mode), 0]);
+        w.put(&self.trial.to_le_bytes());
         w.put(&tick_to_wire(self.answers_tick).to_le_bytes());
         Ok(buf)
     }
@@ -347,11 +361,12 @@ pub fn decode(bytes: &[u8]) -> Result<Datagram, DecodeError> {
             got => return Err(DecodeError::BadEstop { got }),
         };
         let flags = r.u8();
-        r.skip(2);
+        let trial = r.u16();
         let echo_tick = tick_from_wire(r.u64());
         Ok(Datagram::Sensor(SensorDatagram {
             sequence,
             tick,
+            trial,
             frame: SensorFrame {
                 encoder_counts,
                 force_raw_n,
@@ -369,11 +384,13 @@ pub fn decode(bytes: &[u8]) -> Result<Datagram, DecodeError> {
         }
         let byte = r.u8();
         let mode = mode_from_wire(byte).ok_or(DecodeError::BadMode { got: byte })?;
-        r.skip(3);
+        r.skip(1);
+        let trial = r.u16();
         let answers_tick = tick_from_wire(r.u64());
         Ok(Datagram::Command(CommandDatagram {
             sequence,
             tick,
+            trial,
             command: MotorCommand { force_n },
             mode,
             answers_tick,
@@ -389,6 +406,7 @@ mod tests {
         CommandDatagram {
             sequence: 7,
             tick: Tick(1234),
+            trial: 0x0102,
             command: MotorCommand {
                 force_n: [1.5, -2.25],
             },
@@ -399,12 +417,14 @@ mod tests {
 
     #[test]
     fn sizes_are_multiples_of_eight_and_fields_sit_where_the_spec_says() {
-        // The layout tables in hil/docs/wire.md: echo_tick at 56, answers_tick at 40.
+        // The layout tables in hil/docs/wire.md: trial at 54 and 38, echo_tick at 56,
+        // answers_tick at 40.
         assert_eq!(SENSOR_LEN % 8, 0);
         assert_eq!(COMMAND_LEN % 8, 0);
         let s = SensorDatagram {
             sequence: 0x0403_0201,
             tick: Tick(9),
+            trial: 0x0605,
             frame: SensorFrame {
                 encoder_counts: [-1, 2],
                 force_raw_n: [0.5, -0.5],
@@ -421,12 +441,14 @@ mod tests {
         assert_eq!(&s[44..52], &(-0.5f64).to_le_bytes());
         assert_eq!(s[52], 1);
         assert_eq!(s[53], FLAG_WATCHDOG_ZEROED);
-        assert_eq!(&s[54..56], &[0, 0]);
+        assert_eq!(&s[54..56], &[5, 6]);
         assert_eq!(&s[56..64], &0x1122u64.to_le_bytes());
         let c = command().encode().unwrap_or([0; COMMAND_LEN]);
         assert_eq!(&c[6..8], &[2, 0]);
         assert_eq!(&c[20..28], &1.5f64.to_le_bytes());
         assert_eq!(c[36], 2);
+        assert_eq!(c[37], 0);
+        assert_eq!(&c[38..40], &[2, 1]);
         assert_eq!(&c[40..48], &1233u64.to_le_bytes());
     }
 

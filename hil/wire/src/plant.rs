@@ -16,6 +16,10 @@
 //! A listening UDP transport learns its peer from the first valid command; frames sent
 //! before that are counted `unsent`.
 //!
+//! Trials: every frame carries the trial id set by [`PlantEnd::set_trial`] (0 until
+//! then); a plant that runs a protocol reads the trial the controller asks for from
+//! [`PlantEnd::latest_command`] and sets it up before saying so.
+//!
 //! Real time: all buffers are fields sized in [`PlantEnd::new`]; nothing here allocates
 //! after it.
 
@@ -48,6 +52,7 @@ pub struct PlantEnd<T: Transport> {
     limits: PlantLimits,
     inbox: Inbox,
     next_sequence: u32,
+    trial: u16,
     latest: Option<CommandDatagram>,
     latest_at: Tick,
     buf: [u8; MAX_DATAGRAM],
@@ -62,6 +67,7 @@ impl<T: Transport> PlantEnd<T> {
             limits,
             inbox: Inbox::default(),
             next_sequence: 0,
+            trial: 0,
             latest: None,
             latest_at: Tick(0),
             buf: [0; MAX_DATAGRAM],
@@ -104,6 +110,17 @@ impl<T: Transport> PlantEnd<T> {
         }
     }
 
+    /// The trial id the next frames carry: the trial this plant has set up (0: none).
+    pub fn set_trial(&mut self, trial: u16) {
+        self.trial = trial;
+    }
+
+    /// The trial id the frames carry.
+    #[must_use]
+    pub fn trial(&self) -> u16 {
+        self.trial
+    }
+
     /// The newest valid command, if any.
     #[must_use]
     pub fn latest_command(&self) -> Option<&CommandDatagram> {
@@ -117,6 +134,7 @@ impl<T: Transport> PlantEnd<T> {
         let bytes = SensorDatagram {
             sequence: self.next_sequence,
             tick: now,
+            trial: self.trial,
             frame,
             watchdog_zeroed: self.watchdog_zeroed(now),
             echo_tick: self.latest.map(|c| c.tick),

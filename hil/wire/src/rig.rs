@@ -30,6 +30,12 @@
 //! from a first command, so the controller writes before it can read; a zero command
 //! in `Mode::Configured` is the hello. `read` returns `NoFrameYet` until a frame is in.
 //!
+//! Trials: commands carry the trial id given to [`WireRig::begin_trial`] (0 until
+//! then). Once a trial is begun, a frame of another trial (the plant has not set the
+//! new one up yet, or a late frame of the last) is a valid datagram, counted
+//! `accepted`, but never the frame `read` returns: until the plant's frames name the
+//! trial, `read` answers `NoFrameYet`. A controller at trial 0 takes every frame.
+//!
 //! Real time: all buffers are fields sized in [`WireRig::new`]; `read` and `write`
 //! allocate nothing.
 
@@ -68,6 +74,7 @@ pub struct WireRig<T: Transport> {
     limits: RigLimits,
     inbox: Inbox,
     next_sequence: u32,
+    trial: u16,
     mode: Mode,
     newest: Option<SensorDatagram>,
     newest_at: Tick,
@@ -84,6 +91,7 @@ impl<T: Transport> WireRig<T> {
             limits,
             inbox: Inbox::default(),
             next_sequence: 0,
+            trial: 0,
             mode: Mode::Configured,
             newest: None,
             newest_at: Tick(0),
@@ -95,6 +103,29 @@ impl<T: Transport> WireRig<T> {
     /// Sets the mode the next commands carry (the plant applies force only in `Active`).
     pub fn set_mode(&mut self, mode: Mode) {
         self.mode = mode;
+    }
+
+    /// Begins trial `trial` (1-based id): the next commands name it, and the frames of
+    /// any other trial are no longer read (module docs). The newest frame is forgotten,
+    /// so `read` answers `NoFrameYet` until the plant's first frame of this trial.
+    pub fn begin_trial(&mut self, trial: u16) {
+        self.trial = trial;
+        self.newest = None;
+        self.newest_at = Tick(0);
+        self.round_trip = None;
+    }
+
+    /// The trial id the commands carry.
+    #[must_use]
+    pub fn trial(&self) -> u16 {
+        self.trial
+    }
+
+    /// The controller's clock starts again at tick 0 (a trial's controller counts its
+    /// own ticks from 0): the newest frame counts as arrived at tick 0, so the stale
+    /// watchdog measures from there.
+    pub fn restart_clock(&mut self) {
+        self.newest_at = Tick(0);
     }
 
     /// The mode the next command carries.
@@ -135,6 +166,11 @@ impl<T: Transport> WireRig<T> {
     pub fn transport(&self) -> &T {
         &self.transport
     }
+
+    /// The transport, e.g. to move a session clock on between trials.
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.transport
+    }
 }
 
 impl<T: Transport> RigIo for WireRig<T> {
@@ -151,8 +187,10 @@ impl<T: Transport> RigIo for WireRig<T> {
                         self.inbox.admit(bytes, Expect::Sensor)
                     {
                         worst_gap = worst_gap.max(missing);
-                        self.newest = Some(s);
-                        fresh = true;
+                        if self.trial == 0 || s.trial == self.trial {
+                            self.newest = Some(s);
+                            fresh = true;
+                        }
                     }
                 }
                 Ok(None) => break Ok(()),
@@ -188,6 +226,7 @@ impl<T: Transport> RigIo for WireRig<T> {
         let bytes = CommandDatagram {
             sequence: self.next_sequence,
             tick: now,
+            trial: self.trial,
             command,
             mode: self.mode,
             answers_tick: self.newest.map(|s| s.tick),

@@ -42,11 +42,13 @@ fn sensor() -> impl Strategy<Value = SensorDatagram> {
         any::<bool>(),
         any::<bool>(),
         opt_tick(),
+        any::<u16>(),
     )
         .prop_map(
-            |(sequence, tick, counts, force, estop, wd, echo_tick)| SensorDatagram {
+            |(sequence, tick, counts, force, estop, wd, echo_tick, trial)| SensorDatagram {
                 sequence,
                 tick: Tick(tick),
+                trial,
                 frame: SensorFrame {
                     encoder_counts: counts,
                     force_raw_n: force,
@@ -65,11 +67,13 @@ fn command() -> impl Strategy<Value = CommandDatagram> {
         [finite(), finite()],
         mode(),
         opt_tick(),
+        any::<u16>(),
     )
         .prop_map(
-            |(sequence, tick, force_n, mode, answers_tick)| CommandDatagram {
+            |(sequence, tick, force_n, mode, answers_tick, trial)| CommandDatagram {
                 sequence,
                 tick: Tick(tick),
+                trial,
                 command: MotorCommand { force_n },
                 mode,
                 answers_tick,

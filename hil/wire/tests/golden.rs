@@ -33,6 +33,7 @@ fn python_struct_and_the_crate_agree_byte_for_byte() {
         Datagram::Sensor(SensorDatagram {
             sequence: u32::MAX,
             tick: Tick(123_456_789),
+            trial: 513,
             frame: SensorFrame {
                 encoder_counts: [-120_000, 45],
                 force_raw_n: [0.8, -1.25e-3],
@@ -51,6 +52,7 @@ fn python_struct_and_the_crate_agree_byte_for_byte() {
         Datagram::Command(CommandDatagram {
             sequence: 17,
             tick: Tick(9_000),
+            trial: 42,
             command: MotorCommand {
                 force_n: [12.5, -3.0],
             },
@@ -63,6 +65,7 @@ fn python_struct_and_the_crate_agree_byte_for_byte() {
         Datagram::Command(CommandDatagram {
             sequence: 0,
             tick: Tick(0),
+            trial: 0,
             command: MotorCommand::ZERO,
             mode: Mode::Configured,
             answers_tick: None,

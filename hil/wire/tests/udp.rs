@@ -122,6 +122,7 @@ fn a_stranger_cannot_become_the_peer_or_speak_after_it() {
     let forged = CommandDatagram {
         sequence: 1000,
         tick: Tick(5),
+        trial: 0,
         command: MotorCommand {
             force_n: [50.0, 50.0],
         },
