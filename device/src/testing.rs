@@ -1,6 +1,9 @@
 //! [`RigIo`] implementations for tests: a scripted mock whose sensor frame the test
 //! sets, and a point-mass rig that closes the loop with exact double-integrator carts.
 //! Public so other rooms' tests can drive the controller without the simulator.
+//! [`alloc`] is the counting allocator of the tests that prove a tick allocates nothing.
+
+pub mod alloc;
 
 use crate::io::{ErrorKind, MotorCommand, RigIo, RigIoError, SensorFrame};
 use crate::time::{Rate, Tick};

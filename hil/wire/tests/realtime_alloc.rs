@@ -6,52 +6,13 @@
 //! thread-local, which itself never allocates), so the test harness's other threads
 //! cannot be mistaken for the link.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
-// A global allocator is an `unsafe impl`; it only forwards to the system allocator.
-#![allow(unsafe_code)]
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-
+use rigtwin_device::testing::alloc::{Counting, allocations};
 use rigtwin_device::{Mode, MotorCommand, Rate, RigIo, SensorFrame, Tick};
 use rigtwin_wire::{
     FaultInjector, FaultSpec, Faulty, PlantEnd, PlantLimits, RigLimits, Transport, WireRig,
     channel_pair,
 };
-
-struct Counting;
-
-thread_local! {
-    /// Allocations (and reallocations) made by this thread.
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_allocation() {
-    // `try_with`: a thread being torn down has no counter left; nothing to note then.
-    let _ = ALLOCATIONS.try_with(|c| c.set(c.get() + 1));
-}
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        // SAFETY: forwarded unchanged to the system allocator.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
