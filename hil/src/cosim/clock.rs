@@ -29,6 +29,12 @@ pub trait Clock {
     /// `next`, or a later one up to `last` (the run's final tick) if deadlines were
     /// missed.
     fn wait(&mut self, next: Tick, last: Tick) -> Tick;
+
+    /// Counts the deadlines from the next [`Clock::wait`] on, as if that moment were the
+    /// next tick's deadline: time spent outside the loop (building a trial) is neither
+    /// a missed deadline nor a reason to catch up. Nothing for a clock without
+    /// deadlines.
+    fn resync(&mut self) {}
 }
 
 /// Lock step: every tick is due at once. Nothing is measured.
@@ -145,6 +151,10 @@ impl WallClock {
 }
 
 impl Clock for WallClock {
+    fn resync(&mut self) {
+        self.restart();
+    }
+
     fn wait(&mut self, next: Tick, last: Tick) -> Tick {
         let Ok(t) = now_ns() else {
             // CLOCK_MONOTONIC was readable in `new`; it does not go away. Should it, run

@@ -326,7 +326,10 @@ pub fn fresh_dir(base: &Path, name: &str, seed: u64) -> PathBuf {
         .unwrap_or(first)
 }
 
-fn manifest(protocol: &Protocol, subject: &VirtualSubject, session_seed: u64) -> Manifest {
+/// The manifest of `subject`'s session of `protocol` with `session_seed`, before any
+/// trial: the device, the subject's geometry and factors, the seed and the model.
+#[must_use]
+pub fn manifest(protocol: &Protocol, subject: &VirtualSubject, session_seed: u64) -> Manifest {
     let c = &protocol.controller;
     let (kind, mass, damping) = match c.law {
         LawKind::Admittance => (
@@ -468,35 +471,7 @@ fn run_trial(
             }
         })
         .collect();
-    let (kind, start_m, goal_m) = match &plan.task {
-        TrialTask::Reach { .. } => {
-            let r = protocol.reach();
-            (TrialKind::Reach, Some(r.start_m), Some(r.goal_m))
-        }
-        TrialTask::Hold { .. } => (TrialKind::Hold, Some(protocol.hold().hand_m), None),
-        TrialTask::Calibration => (
-            TrialKind::Other("calibration".to_owned()),
-            Some(protocol.hold().hand_m),
-            None,
-        ),
-    };
-    let perturbation = match (&plan.task, onset_s) {
-        (TrialTask::Reach { angle_deg: Some(a) }, Some(t)) => Some(Perturbation {
-            kind: PerturbationKind::ForcePulse,
-            onset_s: t,
-            duration_s: protocol.controller.force_pulse.duration_s,
-            amplitude: Amplitude::ForceN(protocol.controller.force_pulse.amplitude_n),
-            angle_deg: *a,
-        }),
-        _ => None,
-    };
-    let meta = TrialMeta {
-        id: plan.index + 1,
-        kind,
-        start_m,
-        goal_m,
-        perturbation,
-    };
+    let meta = trial_meta(protocol, plan, onset_s);
     let keep = onset_s.is_some() || !sim.push_onsets.is_empty();
     let result = TrialResult {
         id: plan.index + 1,
@@ -519,6 +494,40 @@ fn run_trial(
         simulated_s,
         timing,
     })
+}
+
+/// The manifest entry of `plan`'s trial: its id, kind, start and goal, and its force
+/// pulse where one started (`onset_s` on the table clock).
+pub(crate) fn trial_meta(protocol: &Protocol, plan: &TrialPlan, onset_s: Option<f64>) -> TrialMeta {
+    let (kind, start_m, goal_m) = match &plan.task {
+        TrialTask::Reach { .. } => {
+            let r = protocol.reach();
+            (TrialKind::Reach, Some(r.start_m), Some(r.goal_m))
+        }
+        TrialTask::Hold { .. } => (TrialKind::Hold, Some(protocol.hold().hand_m), None),
+        TrialTask::Calibration => (
+            TrialKind::Other("calibration".to_owned()),
+            Some(protocol.hold().hand_m),
+            None,
+        ),
+    };
+    let perturbation = match (&plan.task, onset_s) {
+        (TrialTask::Reach { angle_deg: Some(a) }, Some(t)) => Some(Perturbation {
+            kind: PerturbationKind::ForcePulse,
+            onset_s: t,
+            duration_s: protocol.controller.force_pulse.duration_s,
+            amplitude: Amplitude::ForceN(protocol.controller.force_pulse.amplitude_n),
+            angle_deg: *a,
+        }),
+        _ => None,
+    };
+    TrialMeta {
+        id: plan.index + 1,
+        kind,
+        start_m,
+        goal_m,
+        perturbation,
+    }
 }
 
 /// The variational truth `perturbed − twin`, filtered as 000_* filters its simulated
@@ -574,7 +583,11 @@ fn twin_truth(
     }
 }
 
-fn prepare_out(dir: &Path) -> Result<(), RehearseError> {
+/// Creates the output folder `dir`, refusing one that exists and is not empty.
+///
+/// # Errors
+/// [`RehearseError::OutputExists`], or the I/O error.
+pub fn prepare_out(dir: &Path) -> Result<(), RehearseError> {
     let io = |source| RehearseError::Io {
         path: dir.to_path_buf(),
         source,

@@ -139,7 +139,19 @@ pub struct Parts {
     pub recorder: Recorder,
 }
 
-/// The parts [`build`] bundles.
+/// What runs on the controller's side of one trial: the controller, its driver and a
+/// recorder. A runner whose plant is across a wire builds only these.
+#[derive(Debug)]
+pub struct ControllerParts {
+    /// The protocol's controller (the trial's imposed-motion axis set).
+    pub controller: Controller,
+    /// Activation and the trial's perturbations.
+    pub driver: TrialDriver,
+    /// A recorder sized for the trial.
+    pub recorder: Recorder,
+}
+
+/// The parts [`build`] bundles: [`controller_parts`] and [`plant`] of the same trial.
 ///
 /// # Errors
 /// As [`build`].
@@ -150,9 +162,29 @@ pub fn parts(
     plan: &TrialPlan,
     with_perturbation: bool,
 ) -> Result<Parts, RehearseError> {
+    let c = controller_parts(protocol, subject, session_seed, plan, with_perturbation)?;
+    Ok(Parts {
+        controller: c.controller,
+        driver: c.driver,
+        plant: plant(protocol, subject, session_seed, plan)?,
+        recorder: c.recorder,
+    })
+}
+
+/// The simulated plant of one trial: the rig at the trial's start with the subject's
+/// arm given the trial's task (or the spring-mass rig), seeded from the trial's streams.
+/// It is the same whether the controller runs beside it or across a wire.
+///
+/// # Errors
+/// [`RehearseError`] if the arm or the plant refuse their configuration.
+pub fn plant(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plan: &TrialPlan,
+) -> Result<SimPlant, RehearseError> {
     let seed = |s: Stream| trial_seed(session_seed, subject.index, plan.index, s);
     let mut ctl_cfg = protocol.controller.clone();
-    let rate_div = (TICK_HZ / u64::from(protocol.recording.rate_hz)).max(1);
     let (start_m, attachment, task) = trial_task(protocol, subject, plan, &mut ctl_cfg);
     let rig_cfg = protocol.plant.rig_config(start_m, attachment);
     let human = match task {
@@ -172,12 +204,31 @@ pub fn parts(
         ),
         None => None,
     };
-    let plant = SimPlant::new(
+    Ok(SimPlant::new(
         rig_cfg,
         ChaCha8Rng::seed_from_u64(seed(Stream::Plant)),
         human,
     )
-    .map_err(CoSimError::from)?;
+    .map_err(CoSimError::from)?)
+}
+
+/// The controller's side of one trial: the protocol's controller (a hold trial's
+/// imposed motion on its axis), the driver with the trial's perturbations, and a
+/// recorder sized for the trial.
+///
+/// # Errors
+/// [`RehearseError`] if the controller refuses its configuration.
+pub fn controller_parts(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plan: &TrialPlan,
+    with_perturbation: bool,
+) -> Result<ControllerParts, RehearseError> {
+    let seed = |s: Stream| trial_seed(session_seed, subject.index, plan.index, s);
+    let mut ctl_cfg = protocol.controller.clone();
+    let rate_div = (TICK_HZ / u64::from(protocol.recording.rate_hz)).max(1);
+    trial_task(protocol, subject, plan, &mut ctl_cfg);
     let controller = Controller::new(ctl_cfg)?;
     let pulse = match plan.task {
         TrialTask::Reach { angle_deg: Some(a) } if with_perturbation => {
@@ -207,10 +258,9 @@ pub fn parts(
         let mut rng = ChaCha8Rng::seed_from_u64(seed(Stream::Schedule));
         pushes = rigtwin_device::perturb::schedule::position_schedule(slots, &mut rng);
     }
-    Ok(Parts {
+    Ok(ControllerParts {
         controller,
         driver: TrialDriver::new(pulse, pushes),
-        plant,
         recorder: Recorder::new(rate_div, trial_ticks(protocol)),
     })
 }

@@ -17,7 +17,7 @@ pub use estimate::{
     BornerResult, PiovesanTrial, SessionEstimateError, borner, borner_on_session,
     piovesan_on_session,
 };
-pub use render::{markdown, summary_text};
+pub use render::{markdown, summary_text, timing_text};
 
 /// Mean and sample standard deviation.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Default)]
