@@ -4,6 +4,7 @@ pub mod cosim;
 pub mod discrepancy;
 pub mod protocol;
 pub mod rehearse;
+pub mod remote;
 pub mod replay;
 pub mod report;
 pub mod session;

@@ -7,9 +7,12 @@
 use clap::{Parser, Subcommand};
 
 pub mod compare;
+pub mod controller;
 pub mod diagnose;
 pub mod estimate;
 pub mod inspect;
+pub mod link;
+pub mod plant;
 pub mod rehearse;
 #[cfg(feature = "rerun")]
 pub mod view;
@@ -24,6 +27,8 @@ Examples:
   rigtwin inspect session/ --json
   rigtwin rehearse hil/protocols/reach-perturb.toml
   rigtwin estimate ../shared/recordings/example-none
+  rigtwin plant serve reach-perturb --listen 127.0.0.1:47000
+  rigtwin controller reach-perturb --rig udp://127.0.0.1:47000 --max-trials 4
   rigtwin help inspect")]
 pub struct Cli {
     /// What to do.
@@ -62,6 +67,10 @@ pub enum Command {
     /// the model's plant and human-side effects are added, so the two runs differ by the
     /// model alone.
     Compare(compare::Args),
+    /// Run the rig's controller in real time against a plant across the wire (UDP).
+    Controller(controller::Args),
+    /// The simulated rig and subject as a plant across the wire: `plant serve`.
+    Plant(plant::Args),
     /// Show a recorded session in the rerun viewer (live, or saved to an .rrd).
     #[cfg(feature = "rerun")]
     View(view::Args),
@@ -78,6 +87,8 @@ pub fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Controller(args) => controller::run(args),
+        Command::Plant(args) => plant::run(args),
         #[cfg(feature = "rerun")]
         Command::View(args) => view::run(args),
     }

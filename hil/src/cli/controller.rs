@@ -1,0 +1,197 @@
+//! `rigtwin controller`: the rig's controller running a protocol's trials in real time
+//! against a plant across the wire, recording the session as the rig records it.
+
+use std::io::IsTerminal as _;
+use std::net::{SocketAddr, ToSocketAddrs as _};
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::Context as _;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rigtwin::protocol::Protocol;
+use rigtwin::rehearse;
+use rigtwin::remote::{self, controller};
+use rigtwin::session::SessionWriter;
+use rigtwin_wire::{RigLimits, UdpTransport, WireRig};
+
+use super::link::{LinkArgs, timing_table};
+
+/// Run the rig's own controller in real time against a plant across the wire (the
+/// simulated rig and subject of `rigtwin plant serve`, or a real rig's I/O bridge that
+/// speaks the wire protocol, hil/docs/wire.md).
+#[derive(Debug, clap::Args)]
+#[command(after_help = "\
+Examples (two terminals, same protocol and seed on both ends):
+  rigtwin plant serve reach-perturb --listen 127.0.0.1:47000 --out out/plant
+  rigtwin controller reach-perturb --rig udp://127.0.0.1:47000 --out out/controller --max-trials 4
+  rigtwin controller reach-perturb --rig udp://127.0.0.1:47000 --faults drop=0.01,stall=1.5s:50ms
+
+Per trial the controller names the trial in its commands, says hello until the plant's
+frames of that trial arrive, then runs the trial at the control rate (4 kHz) on absolute
+deadlines. It trips (latched for the trial) on a stale or missing frame after
+--stale-ticks, a sequence gap of more than --max-gap frames, the e-stop or a limit.
+Output: <out>/session.toml and trials/*.csv (the rig's columns; no ground truth), and a
+timing table (wake-up latency, loop time, missed deadlines) plus the link's counters.")]
+pub struct Args {
+    /// Protocol file (TOML), or the name of a shipped protocol.
+    pub protocol: PathBuf,
+
+    /// The plant: udp://HOST:PORT.
+    #[arg(long, value_name = "udp://HOST:PORT")]
+    pub rig: String,
+
+    /// Session seed (default: the protocol's `seed`); use the plant's.
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+
+    /// Output session folder; must not exist or be empty. Default: a fresh
+    /// `out/<name>-controller-<seed>[-k]/`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+
+    /// Run only the first N trials of the schedule.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_trials: Option<u32>,
+
+    /// How long to wait for the plant's first frame of each trial, s.
+    #[arg(long, value_name = "S", default_value_t = 5.0)]
+    pub connect_timeout_s: f64,
+
+    /// Most frames lost in one gap before the controller trips.
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub max_gap: u32,
+
+    #[command(flatten)]
+    pub link: LinkArgs,
+}
+
+/// The plant's address from `udp://HOST:PORT`.
+fn parse_rig(rig: &str) -> anyhow::Result<SocketAddr> {
+    let Some(rest) = rig.strip_prefix("udp://") else {
+        anyhow::bail!("--rig {rig:?}: expected udp://HOST:PORT (e.g. udp://127.0.0.1:47000)");
+    };
+    rest.to_socket_addrs()
+        .with_context(|| format!("--rig {rig:?}: not a HOST:PORT"))?
+        .next()
+        .with_context(|| format!("--rig {rig:?}: the host has no address"))
+}
+
+/// Runs `rigtwin controller`.
+///
+/// # Errors
+/// A bad protocol or argument, an output folder that is not empty, a plant that does
+/// not answer, a socket or writer failure.
+pub fn run(args: &Args) -> anyhow::Result<()> {
+    let protocol = Protocol::load(&args.protocol)?;
+    let peer = parse_rig(&args.rig)?;
+    if !(args.connect_timeout_s.is_finite() && args.connect_timeout_s > 0.0) {
+        anyhow::bail!(
+            "--connect-timeout-s {}: must be a positive number of seconds",
+            args.connect_timeout_s
+        );
+    }
+    let seed = args.seed.unwrap_or(protocol.seed);
+    let out = match &args.out {
+        Some(d) => d.clone(),
+        None => rehearse::fresh_dir(
+            std::path::Path::new("out"),
+            &format!("{}-controller", protocol.name),
+            seed,
+        ),
+    };
+    let subject = protocol.subjects.draw(seed, 1);
+    let mut plans = rehearse::schedule(&protocol, seed, subject.index);
+    if let Some(m) = args.max_trials {
+        plans.truncate(m as usize);
+    }
+    let mut clock = args.link.clock(&protocol)?;
+    let rate = clock_rate(&protocol);
+    let local: SocketAddr = if peer.is_ipv4() {
+        ([0, 0, 0, 0], 0).into()
+    } else {
+        (std::net::Ipv6Addr::UNSPECIFIED, 0).into()
+    };
+    let udp = UdpTransport::connect(local, peer)
+        .with_context(|| format!("opening a UDP socket to {peer}"))?;
+    let transport = remote::with_faults(udp, args.link.faults, args.link.fault_seed, rate);
+    let mut rig = WireRig::new(
+        transport,
+        RigLimits {
+            stale_ticks: args.link.stale_ticks,
+            max_gap: args.max_gap,
+        },
+    )?;
+    rehearse::prepare_out(&out)?;
+    let mut manifest = rehearse::manifest(&protocol, &subject, seed);
+    if let Some(sim) = manifest.sim.as_mut() {
+        sim.model = Some(format!("controller across the wire to {peer}"));
+    }
+    let mut writer = SessionWriter::create(&out, manifest)?;
+    let bar = ProgressBar::new(plans.len() as u64);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials",
+        ) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    let progress = |done: usize, _total: usize| bar.set_position(done as u64);
+    let timeout = Duration::from_secs_f64(args.connect_timeout_s);
+    let result = controller::run(
+        &protocol,
+        &subject,
+        seed,
+        &plans,
+        &mut rig,
+        &mut clock,
+        &mut writer,
+        timeout,
+        &peer.to_string(),
+        &progress,
+    );
+    bar.finish_and_clear();
+    // Whatever happened, keep what was recorded: the timing and the manifest.
+    let timing = clock.summary();
+    writer.set_timing(timing)?;
+    writer.finish()?;
+    let run = result.with_context(|| format!("running {} against {peer}", protocol.name))?;
+    println!("trial  trip                                   round trip  max |x - ref| (x, y)");
+    for t in &run.trials {
+        let trip = t
+            .trip
+            .as_ref()
+            .map_or_else(|| "-".to_owned(), |(k, why)| format!("tick {k}: {why}"));
+        let rt = t
+            .round_trip_ticks
+            .map_or_else(|| "-".to_owned(), |r| format!("{r} ticks"));
+        println!(
+            "{:>5}  {:<38} {:>10}  {:.3} / {:.3} mm",
+            t.id,
+            trip,
+            rt,
+            t.max_tracking_error_m[0] * 1e3,
+            t.max_tracking_error_m[1] * 1e3
+        );
+    }
+    print!("{}", timing_table("controller", &run.timing));
+    println!("\nlink (controller end): {}", run.link);
+    if args.link.faults != rigtwin_wire::FaultSpec::default() {
+        println!(
+            "faults injected (controller -> plant): {:?}",
+            rig.transport().faults()
+        );
+    }
+    println!("session: {}", out.display());
+    Ok(())
+}
+
+/// The protocol's control rate.
+pub fn clock_rate(protocol: &Protocol) -> rigtwin_device::Rate {
+    protocol
+        .controller
+        .control_rate()
+        .unwrap_or(rigtwin_device::Rate::CONTROL)
+}

@@ -1,0 +1,71 @@
+//! What both ends of the wire take on the command line: the link's faults and watchdog,
+//! the real-time requests, and the way a run's clock and link are printed.
+
+use std::time::Duration;
+
+use rigtwin::cosim::WallClock;
+use rigtwin::protocol::Protocol;
+use rigtwin::report::{SubjectTiming, timing_text};
+use rigtwin::session::Timing;
+use rigtwin_wire::FaultSpec;
+
+/// The link and the loop's real-time requests.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LinkArgs {
+    /// Faults injected on this end's sending side, seeded (hil/docs/wire.md):
+    /// e.g. drop=0.01,delay_ticks=2,duplicate=0.001,reorder=0.001,stall=1.5s:50ms
+    #[arg(long, value_name = "SPEC", default_value = "none")]
+    pub faults: FaultSpec,
+
+    /// Seed of the fault injector.
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub fault_seed: u64,
+
+    /// Watchdog: ticks without a fresh datagram from the other end at which this end
+    /// reacts (the plant zeroes the force, the controller trips). 4 ticks = 1 ms.
+    #[arg(long, value_name = "TICKS", default_value_t = 4, value_parser = clap::value_parser!(u32).range(1..))]
+    pub stale_ticks: u32,
+
+    /// Run the loop's thread under SCHED_FIFO at this priority (1-99).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]
+    pub rt_priority: Option<u8>,
+
+    /// Lock the process's memory in RAM (mlockall).
+    #[arg(long)]
+    pub lock_memory: bool,
+
+    /// Spin on the clock this many microseconds before each deadline instead of
+    /// sleeping (removes the kernel's wake-up latency; costs that much CPU).
+    #[arg(long, value_name = "US", default_value_t = 0)]
+    pub spin_us: u64,
+}
+
+impl LinkArgs {
+    /// The wall clock at the protocol's control rate, with the OS requests made (each
+    /// refusal is one line on stderr; the run goes on without it).
+    pub fn clock(&self, protocol: &Protocol) -> anyhow::Result<WallClock> {
+        if self.lock_memory
+            && let Err(note) = rigtwin::cosim::rt::lock_memory()
+        {
+            eprintln!("{note}");
+        }
+        if let Some(p) = self.rt_priority
+            && let Err(note) = rigtwin::cosim::rt::set_fifo_priority(p)
+        {
+            eprintln!("{note}");
+        }
+        let rate = protocol
+            .controller
+            .control_rate()
+            .unwrap_or(rigtwin_device::Rate::CONTROL);
+        Ok(WallClock::new(rate, Duration::from_micros(self.spin_us))?)
+    }
+}
+
+/// The timing table of one loop (`who`: "controller" or "plant").
+pub fn timing_table(who: &str, timing: &Timing) -> String {
+    timing_text(&[SubjectTiming {
+        subject: who.to_owned(),
+        timing: *timing,
+    }])
+}

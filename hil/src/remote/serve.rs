@@ -1,0 +1,304 @@
+//! The simulated rig and subject as a plant across the wire: `rigtwin plant serve`.
+//!
+//! The plant is the clock master. Every tick of its own clock it
+//! 1. sets up the trial the newest command names, if it is not the one running (the
+//!    trial of the protocol's schedule with that id: the rig at its start, the subject
+//!    given its task, both seeded as in a rehearsal, the trial clock at 0);
+//! 2. samples the sensors of the trial's state and sends the frame;
+//! 3. takes every pending command and applies the newest one's force (zero-order hold;
+//!    zero when its mode is not `active` or the command watchdog has fired);
+//! 4. lets the subject answer and steps physics by one tick, and records the true state.
+//!
+//! A late wake-up runs every tick that came due, one after the other: physics never
+//! skips (the hardware would have moved on), and the controller sees only the newest
+//! frame. A trial ends after the protocol's trial length; the handle then stays where
+//! it is, frames of that trial keep going out (so the controller's last ticks read
+//! them), and the next trial starts when a command names it. The run ends when every
+//! trial of the schedule is recorded, or after `idle` without a new command.
+//!
+//! Recorded per trial (`<out>/session.toml`, `trials/NNNN.csv`): the true handle
+//! position and velocity (`x_m`, `vx_m_per_s`, and `true_x_m`), the true force of the
+//! hand on the handle (`fx_n`, `hand_fx_n`) and the force the motors applied
+//! (`cmd_fx_n`): what the plant is, not what a rig measures.
+
+use std::collections::BTreeSet;
+use std::sync::mpsc;
+
+use rigtwin_device::{MotorCommand, RigIo, SensorFrame, Tick, TickReport};
+use rigtwin_wire::{LinkCounters, PlantEnd, Transport};
+
+use super::{RemoteError, trial_id};
+use crate::cosim::record::{Block, Layout, Recorder};
+use crate::cosim::{Clock, SimPlant};
+use crate::protocol::{Protocol, VirtualSubject};
+use crate::rehearse::record::to_trial;
+use crate::rehearse::{TICK_HZ, TrialPlan, trial, trial_meta};
+use crate::session::{SessionWriter, TrialMeta};
+
+/// How a serve run ends and what it presses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ServeOptions {
+    /// Plant ticks without a new command after which the server stops (from its start,
+    /// before the first command); `None`: never.
+    pub idle_ticks: Option<u64>,
+    /// Press the simulated e-stop at this trial tick of every trial (to rehearse and
+    /// measure the safety chain); `None`: never.
+    pub estop_at_tick: Option<u64>,
+}
+
+/// Why the server stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ServeEnd {
+    /// Every trial of the schedule was recorded.
+    AllTrials,
+    /// No new command came for the idle time.
+    Idle,
+}
+
+/// What the server did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServeReport {
+    /// Why it stopped.
+    pub end: ServeEnd,
+    /// Ids of the trials recorded, in order.
+    pub recorded: Vec<u32>,
+    /// Trials the controller left before their end (recorded up to there).
+    pub cut_short: Vec<u32>,
+    /// Plant ticks run.
+    pub ticks: u64,
+    /// Plant ticks at which the command watchdog had zeroed the force during a trial.
+    pub watchdog_ticks: u64,
+    /// Commands that named a trial the schedule does not have (ignored).
+    pub unknown_trial_commands: u64,
+    /// Per pressed e-stop: plant ticks from the press to the first tick whose newest
+    /// command answers a frame sent at or after the press and comes from a controller
+    /// no longer active, so that its force is no longer applied (the safety chain's
+    /// latency over the wire: frame out, controller trips, command back).
+    pub estop_latency_ticks: Vec<u64>,
+    /// The plant end's link counters.
+    pub link: LinkCounters,
+}
+
+/// Ticks without a command after the last trial at which the server stops (0.1 s at
+/// 4 kHz: far more than a round trip, far less than a human notices).
+const LINGER_TICKS: u64 = 400;
+
+struct Running {
+    plan: usize,
+    sim: SimPlant,
+    recorder: Recorder,
+    tick: u64,
+    estop_pressed_at: Option<u64>,
+}
+
+/// Serves `plans` (the schedule of `protocol` with `session_seed`, for `subject`) through
+/// `end` on `clock`, writing each trial's true plant state to `writer` as it ends.
+/// `on_trial(id)` is called when a trial is set up. The session is written on a thread
+/// of its own, so that no file is created, written or synced inside the loop.
+///
+/// # Errors
+/// [`RemoteError`] if a trial cannot be built, the plant diverges, the socket fails or
+/// the session cannot be written.
+#[allow(clippy::too_many_arguments)]
+pub fn serve<T: Transport, C: Clock>(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plans: &[TrialPlan],
+    end: &mut PlantEnd<T>,
+    clock: &mut C,
+    writer: &mut SessionWriter,
+    options: ServeOptions,
+    on_trial: &mut dyn FnMut(u32),
+) -> Result<ServeReport, RemoteError> {
+    let rate = f64::from(protocol.recording.rate_hz);
+    let layout = Layout {
+        truth: true,
+        position_perturbation: false,
+    };
+    let (tx, rx) = mpsc::channel::<(TrialMeta, Vec<Block>)>();
+    std::thread::scope(|scope| {
+        let written = scope.spawn(move || -> Result<(), RemoteError> {
+            for (meta, rows) in rx {
+                writer.write_trial(meta, &to_trial(&rows, rate, layout))?;
+            }
+            Ok(())
+        });
+        let served = serve_loop(
+            protocol,
+            subject,
+            session_seed,
+            plans,
+            end,
+            clock,
+            &tx,
+            options,
+            on_trial,
+        );
+        drop(tx);
+        let written = written.join().unwrap_or(Err(RemoteError::WriterPanicked));
+        // A writer error is the cause of anything the loop saw after it.
+        written?;
+        served
+    })
+}
+
+#[allow(clippy::too_many_arguments)]
+fn serve_loop<T: Transport, C: Clock>(
+    protocol: &Protocol,
+    subject: &VirtualSubject,
+    session_seed: u64,
+    plans: &[TrialPlan],
+    end: &mut PlantEnd<T>,
+    clock: &mut C,
+    tx: &mpsc::Sender<(TrialMeta, Vec<Block>)>,
+    options: ServeOptions,
+    on_trial: &mut dyn FnMut(u32),
+) -> Result<ServeReport, RemoteError> {
+    let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
+    let n_ticks = trial::trial_ticks(protocol);
+    for p in plans {
+        trial_id(p.index, plans.len())?;
+    }
+    let mut report = ServeReport {
+        end: ServeEnd::Idle,
+        recorded: Vec::with_capacity(plans.len()),
+        cut_short: Vec::new(),
+        ticks: 0,
+        watchdog_ticks: 0,
+        unknown_trial_commands: 0,
+        estop_latency_ticks: Vec::new(),
+        link: end.counters(),
+    };
+    let mut done = BTreeSet::new();
+    let mut running: Option<Running> = None;
+    let mut held_frame: Option<SensorFrame> = None;
+    let mut last_command_at = 0_u64;
+    let mut s = 0_u64;
+    // Hands a trial to the writer thread; if that thread has stopped, its error is
+    // what `serve` returns.
+    let finish = |r: Running, report: &mut ServeReport| {
+        let plan = &plans[r.plan];
+        let rows = r.recorder.finish();
+        if rows.is_empty() {
+            return;
+        }
+        let _ = tx.send((trial_meta(protocol, plan, None), rows));
+        report.recorded.push(plan.index + 1);
+        if r.tick < n_ticks {
+            report.cut_short.push(plan.index + 1);
+        }
+    };
+    loop {
+        let due = clock.wait(Tick(s), Tick(u64::MAX - 1)).0.max(s);
+        let mut ran = 0;
+        for k in s..=due {
+            let now = Tick(k);
+            ran += 1;
+            if end.poll_command(now)?.is_some() {
+                last_command_at = k;
+            }
+            // 1. The trial the controller names.
+            let asked = end.latest_command().map_or(0, |c| c.trial);
+            if asked != 0 && asked != end.trial() {
+                match plans.iter().position(|p| p.index + 1 == u32::from(asked)) {
+                    Some(i) => {
+                        if let Some(r) = running.take() {
+                            finish(r, &mut report);
+                        }
+                        let plan = &plans[i];
+                        running = Some(Running {
+                            plan: i,
+                            sim: trial::plant(protocol, subject, session_seed, plan)?,
+                            recorder: Recorder::new(div, n_ticks),
+                            tick: 0,
+                            estop_pressed_at: None,
+                        });
+                        done.remove(&plan.index);
+                        end.set_trial(asked);
+                        on_trial(plan.index + 1);
+                        // Building the trial took wall time that belongs to no trial:
+                        // the trial starts now, on deadlines counted from here, instead
+                        // of catching up on ticks that would run before the controller
+                        // has seen a frame.
+                        clock.resync();
+                        break;
+                    }
+                    None => report.unknown_trial_commands += 1,
+                }
+            }
+            let Some(r) = running.as_mut() else {
+                // Between trials: the last frame again, so the controller's last ticks
+                // read the handle where it stopped.
+                if let Some(f) = held_frame {
+                    end.send_frame(now, f)?;
+                }
+                continue;
+            };
+            let t = Tick(r.tick);
+            if options.estop_at_tick == Some(r.tick) {
+                r.sim.rig_mut().set_estop(true);
+                r.estop_pressed_at = Some(k);
+            }
+            // 2. Sensors of the state at t.
+            let frame = r.sim.read(t)?;
+            end.send_frame(now, frame)?;
+            // 3. The newest command, held.
+            let force_n = end.applied_force(now);
+            if end.watchdog_zeroed(now) {
+                report.watchdog_ticks += 1;
+            }
+            if let (Some(p), Some(c)) = (r.estop_pressed_at, end.latest_command())
+                && c.mode != rigtwin_device::Mode::Active
+                && c.answers_tick.is_some_and(|a| a.0 >= p)
+            {
+                report.estop_latency_ticks.push(k - p);
+                r.estop_pressed_at = None;
+            }
+            r.sim.write(t, MotorCommand { force_n })?;
+            // 4. Subject and physics, t → t + 1.
+            let sample = r.sim.advance_with(t, false)?;
+            let tick_report = TickReport {
+                tick: t,
+                position_m: sample.position_m,
+                velocity_m_per_s: sample.velocity_m_per_s,
+                force_n: sample.hand_n,
+                command_n: force_n,
+                ..TickReport::default()
+            };
+            r.recorder.push(&tick_report, &sample);
+            r.tick += 1;
+            if r.tick >= n_ticks
+                && let Some(r) = running.take()
+            {
+                done.insert(plans[r.plan].index);
+                held_frame = Some(frame);
+                finish(r, &mut report);
+            }
+        }
+        report.ticks += ran;
+        s += ran;
+        // Every trial is recorded: linger while the controller still sends (its trial
+        // started a round trip after the plant's, so its last ticks read the held frame),
+        // and stop once it has been quiet for `LINGER_TICKS`.
+        if running.is_none()
+            && done.len() == plans.len()
+            && s.saturating_sub(last_command_at) > LINGER_TICKS
+        {
+            report.end = ServeEnd::AllTrials;
+            break;
+        }
+        if options
+            .idle_ticks
+            .is_some_and(|idle| s.saturating_sub(last_command_at) > idle)
+        {
+            report.end = ServeEnd::Idle;
+            if let Some(r) = running.take() {
+                finish(r, &mut report);
+            }
+            break;
+        }
+    }
+    report.link = end.counters();
+    Ok(report)
+}
