@@ -95,10 +95,11 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
     let plant_dir = tmp.path().join("plant");
     let ctl_dir = tmp.path().join("controller");
     let (plant, addr) = serve(&plant_dir, &[]);
+    let protocol_path = protocol(tmp.path());
     let ctl = Command::new(BIN)
         .args([
             "controller",
-            &protocol(tmp.path()),
+            &protocol_path,
             "--seed",
             "42",
             "--max-trials",
@@ -137,33 +138,71 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
     // Nothing of the plant's truth crossed the wire.
     assert!(t.extra.iter().all(|c| c.name != "true_x_m"));
 
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ctl_dir.join("controller.json")).unwrap())
+            .unwrap();
+    let t1 = &report["trials"][0];
+    let div = 4000 / protocol.recording.rate_hz as usize;
+    let row_of = |key: &str| t1[key].as_u64().map_or(rows, |k| k as usize / div);
+    // Until the first missed deadline (or a trip) nothing was held: what follows holds
+    // there whatever the scheduler did later. (With 10 ms allowances a long stall can
+    // hold a command long enough to throw the handle and trip the velocity limit, as it
+    // would on a rig: that is the 1 ms allowance's reason.)
+    let exact = row_of("first_miss_tick").min(row_of("trip_tick"));
+
     // The handle follows the admittance: the rig's position loop tracks the reference
-    // through a round trip of 1-2 ticks over loopback. In lock step the largest
-    // |y - ref_y| of this reach is about 0.1 mm; 1 mm allows the wire's extra tick and
-    // scheduling jitter, and is still a tenth of what an open loop would show (the
-    // handle would lag the reference by the whole reach).
+    // through a round trip of one tick over loopback. Measured: 0.03-0.6 mm at most over
+    // whole reaches; 1 mm is a tenth of what an open loop would show.
     let (y, r) = (&t.y_m, t.ref_y_m.as_ref().unwrap());
-    let trip_row = ctl_out
-        .lines()
-        .find_map(|l| l.split("tick ").nth(1))
-        .and_then(|rest| rest.split(':').next())
-        .and_then(|k| k.parse::<usize>().ok())
-        .map_or(rows, |k| k / (4000 / protocol.recording.rate_hz as usize));
-    let worst = y[..trip_row.min(rows)]
+    let worst = y[..exact]
         .iter()
-        .zip(&r[..trip_row.min(rows)])
+        .zip(&r[..exact])
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
-    assert!(trip_row > rows / 4, "tripped at row {trip_row}: {ctl_out}");
     assert!(
         worst < 1e-3,
-        "max |y - ref_y| = {worst} m before row {trip_row}"
+        "max |y - ref_y| = {worst} m over the first {exact} rows"
     );
-    // The reach went somewhere: the reference moved more than 10 cm before any trip.
-    let moved = r[..trip_row.min(rows)]
+
+    // Equivalence with lock step: until the first missed deadline the trial over UDP is
+    // the lock-step trial of the same protocol and seed but for the wire's one tick of
+    // delay (the plant applies the command answering frame n at n + 1). Measured over a
+    // whole reach without a missed deadline: max |Δy| 0.06 mm, median 5 µm (the
+    // commands differ by 1.5 N median, the hand force by 0.4 N); 0.2 mm would be
+    // exceeded by another trial, seed or noise stream.
+    let lock_dir = tmp.path().join("lock");
+    let lock = Command::new(BIN)
+        .args([
+            "rehearse",
+            &protocol_path,
+            "--seed",
+            "42",
+            "--max-trials",
+            "1",
+        ])
+        .args(["--jobs", "1", "--out"])
+        .arg(&lock_dir)
+        .output()
+        .unwrap();
+    assert!(
+        lock.status.success(),
+        "{}",
+        String::from_utf8_lossy(&lock.stderr)
+    );
+    let l = Session::read(lock_dir.join("S01")).unwrap();
+    let (_, lt) = l.trial(1).unwrap();
+    let dev = lt.y_m[..exact]
         .iter()
-        .fold(0.0_f64, |m, v| m.max((v - r[0]).abs()));
-    assert!(moved > 0.05 || trip_row < rows, "reference moved {moved} m");
+        .zip(&y[..exact])
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "before the first missed deadline (row {exact} of {rows}): max |y_udp - y_lock| = {dev:e} m"
+    );
+    assert!(
+        dev < 2e-4,
+        "max |y_udp - y_lock| = {dev} m over the first {exact} rows"
+    );
 
     // The plant's session: the true state of the same trial, with the applied force.
     let p = Session::read(&plant_dir).unwrap();
@@ -211,9 +250,10 @@ fn the_python_pd_client_holds_the_served_handle() {
         .find_map(|l| l.split("largest deviation ").nth(1))
         .and_then(|v| v.trim_end_matches(" mm").parse::<f64>().ok())
         .unwrap();
-    // The subject reaches 250 mm toward its goal; against 3000 N/m its push of a few
-    // tens of newtons moves the handle some millimetres. 25 mm is a tenth of the reach:
-    // more would mean the PD law did not hold (the watchdog zeroing it, or no force).
+    // The subject reaches 250 mm toward its goal; against 10 000 N/m its push of up to
+    // about 70 N moves the handle some millimetres (measured: 7.3 mm over 3 s). 25 mm is
+    // a tenth of the reach: more would mean the PD law did not hold (the watchdog
+    // zeroing it, or no force).
     assert!(dev_mm < 25.0, "{py_out}");
     // The plant's own record agrees that the handle stayed near where it started while
     // the client held it, and that the motors pushed back.
@@ -238,7 +278,7 @@ fn an_estop_at_the_plant_trips_the_controller_over_udp() {
         .lock()
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let tmp = tempfile::tempdir().unwrap();
-    let (plant, addr) = serve(&tmp.path().join("plant"), &["--estop-at-s", "1.0"]);
+    let (plant, addr) = serve(&tmp.path().join("plant"), &["--estop-at-s", "0.3"]);
     let ctl = Command::new(BIN)
         .args([
             "controller",
@@ -261,19 +301,22 @@ fn an_estop_at_the_plant_trips_the_controller_over_udp() {
         ctl.status
     );
     let plant_out = finish(plant, "plant serve");
-    // The controller latched on the e-stop (unless a stall tripped it before 1 s).
-    let trip = ctl_out
-        .lines()
-        .find(|l| l.contains("tick "))
+    // The controller latched on the e-stop (unless a stall tripped it before 0.3 s).
+    let report: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(tmp.path().join("controller").join("controller.json")).unwrap(),
+    )
+    .unwrap();
+    let trip = report["trials"][0]["trip"]
+        .as_str()
         .unwrap_or_else(|| panic!("no trip: {ctl_out}"));
-    let line = plant_out
-        .lines()
-        .find(|l| l.starts_with("e-stop to zero force"));
-    if trip.to_lowercase().contains("stop") {
+    if trip == "EStop" {
         // Press → frame out → controller trips at its next read → fault command back:
         // on loopback a few ticks; 400 ticks (100 ms) is a human's reaction time, the
         // bound past which an e-stop chain is broken whatever the scheduler does.
-        let line = line.unwrap_or_else(|| panic!("no e-stop latency: {plant_out}"));
+        let line = plant_out
+            .lines()
+            .find(|l| l.starts_with("e-stop to zero force"))
+            .unwrap_or_else(|| panic!("no e-stop latency: {plant_out}"));
         let max_ticks: u64 = line
             .split("max ")
             .nth(1)
@@ -281,5 +324,7 @@ fn an_estop_at_the_plant_trips_the_controller_over_udp() {
             .and_then(|v| v.parse().ok())
             .unwrap();
         assert!((1..=400).contains(&max_ticks), "{line}");
+    } else {
+        eprintln!("a stall tripped the controller before the e-stop: {trip}");
     }
 }

@@ -30,8 +30,10 @@ Per trial the controller names the trial in its commands, says hello until the p
 frames of that trial arrive, then runs the trial at the control rate (4 kHz) on absolute
 deadlines. It trips (latched for the trial) on a stale or missing frame after
 --stale-ticks, a sequence gap of more than --max-gap frames, the e-stop or a limit.
-Output: <out>/session.toml and trials/*.csv (the rig's columns; no ground truth), and a
-timing table (wake-up latency, loop time, missed deadlines) plus the link's counters.")]
+Output: <out>/session.toml and trials/*.csv (the rig's columns; no ground truth),
+<out>/controller.json (per trial: trip, first missed deadline, round trip, tracking
+error; the timing), and a timing table (wake-up latency, loop time, missed deadlines)
+plus the link's counters.")]
 pub struct Args {
     /// Protocol file (TOML), or the name of a shipped protocol.
     pub protocol: PathBuf,
@@ -158,7 +160,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     writer.set_timing(timing)?;
     writer.finish()?;
     let run = result.with_context(|| format!("running {} against {peer}", protocol.name))?;
-    println!("trial  trip                                   round trip  max |x - ref| (x, y)");
+    println!(
+        "trial  trip                                    first missed deadline  round trip  max |x - ref| (x, y)"
+    );
     for t in &run.trials {
         let trip = t
             .trip
@@ -167,15 +171,37 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let rt = t
             .round_trip_ticks
             .map_or_else(|| "-".to_owned(), |r| format!("{r} ticks"));
+        let miss = t
+            .first_miss_tick
+            .map_or_else(|| "-".to_owned(), |k| format!("tick {k}"));
         println!(
-            "{:>5}  {:<38} {:>10}  {:.3} / {:.3} mm",
+            "{:>5}  {:<39} {:>21}  {:>10}  {:.3} / {:.3} mm",
             t.id,
             trip,
+            miss,
             rt,
             t.max_tracking_error_m[0] * 1e3,
             t.max_tracking_error_m[1] * 1e3
         );
     }
+    let trials: Vec<serde_json::Value> = run
+        .trials
+        .iter()
+        .map(|t| {
+            serde_json::json!({
+                "id": t.id,
+                "trip_tick": t.trip.as_ref().map(|(k, _)| k),
+                "trip": t.trip.as_ref().map(|(_, why)| why),
+                "first_miss_tick": t.first_miss_tick,
+                "round_trip_ticks": t.round_trip_ticks,
+                "max_tracking_error_m": t.max_tracking_error_m,
+            })
+        })
+        .collect();
+    let json = serde_json::json!({ "trials": trials, "timing": run.timing });
+    let path = out.join("controller.json");
+    std::fs::write(&path, serde_json::to_string_pretty(&json)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))?;
     print!("{}", timing_table("controller", &run.timing));
     println!("\nlink (controller end): {}", run.link);
     if args.link.faults != rigtwin_wire::FaultSpec::default() {

@@ -73,6 +73,7 @@ pub struct WallClock {
     run_of_misses: u64,
     longest_run: u64,
     ticks: u64,
+    first_miss: Option<Tick>,
 }
 
 /// Largest value the histograms hold, ns (10 s): anything longer is recorded as 10 s.
@@ -108,6 +109,7 @@ impl WallClock {
             run_of_misses: 0,
             longest_run: 0,
             ticks: 0,
+            first_miss: None,
         })
     }
 
@@ -129,11 +131,20 @@ impl WallClock {
 
     /// Starts a new run (a new trial, whose ticks count from 0 again): the next
     /// [`Clock::wait`] sets the first deadline. The histograms and counts go on, so one
-    /// clock measures a whole session; the pause between runs is not a loop time.
+    /// clock measures a whole session; the pause between runs is not a loop time. The
+    /// run's first miss is forgotten.
     pub fn restart(&mut self) {
         self.start_ns = None;
         self.last_wake_ns = None;
         self.run_of_misses = 0;
+        self.first_miss = None;
+    }
+
+    /// The first tick of this run whose deadline was missed (skipped), if any: up to it
+    /// the run was paced exactly.
+    #[must_use]
+    pub fn first_miss(&self) -> Option<Tick> {
+        self.first_miss
     }
 
     /// The timing so far.
@@ -177,6 +188,7 @@ impl Clock for WallClock {
         let skipped = due - next.0;
         self.missed += skipped;
         if skipped > 0 {
+            self.first_miss.get_or_insert(next);
             self.run_of_misses += skipped;
             self.longest_run = self.longest_run.max(self.run_of_misses);
         } else {

@@ -114,6 +114,10 @@ pub struct RemoteTrial {
     /// Round trip at the trial's end, controller ticks (frame read → command applied →
     /// next frame read), if the plant echoed a command.
     pub round_trip_ticks: Option<u64>,
+    /// The first tick whose deadline the controller's loop missed (the plant then moved
+    /// on under a held command), if any: up to it, the trial ran as in lock step but
+    /// for the wire's delay.
+    pub first_miss_tick: Option<u64>,
     /// Largest distance between the handle (encoders) and the admittance's reference
     /// over the trial, per axis, m: how well the rig followed the controller.
     pub max_tracking_error_m: [f64; 2],
@@ -161,13 +165,15 @@ pub fn run<T: Transport>(
     let mut session_tick = 0;
     for (k, plan) in plans.iter().enumerate() {
         let id = trial_id(plan.index, plans.len())?;
+        // Built before the hand-over, so that the trial's tick 0 follows the plant's
+        // first frame of it by no more than the loop's own latency.
+        let parts = trial::controller_parts(protocol, subject, session_seed, plan, true)?;
         rig.transport_mut().set_base(session_tick);
         session_tick += await_plant(rig, id, clock, timeout, peer)?;
         rig.transport_mut().set_base(session_tick);
         session_tick += n_ticks;
         rig.restart_clock();
         clock.restart();
-        let parts = trial::controller_parts(protocol, subject, session_seed, plan, true)?;
         let mut cosim = CoSim::new(
             parts.controller,
             parts.driver,
@@ -190,6 +196,7 @@ pub fn run<T: Transport>(
             id: plan.index + 1,
             trip: sim.extremes.trip.clone(),
             round_trip_ticks,
+            first_miss_tick: clock.first_miss().map(|t| t.0),
             max_tracking_error_m: err,
         });
         progress(k + 1, plans.len());
