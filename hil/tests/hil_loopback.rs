@@ -67,6 +67,27 @@ fn serve(out: &Path, extra: &[&str]) -> (Child, String) {
     (child, addr)
 }
 
+/// Runs `rigtwin controller` on `protocol` (seed 42, one trial, 10 ms allowances)
+/// against the plant at `addr`, into `out`; returns its standard output.
+fn controller(protocol: &str, addr: &str, out: &Path) -> String {
+    let ctl = Command::new(BIN)
+        .args(["controller", protocol, "--seed", "42", "--max-trials", "1"])
+        .args(LOOSE)
+        .args(["--max-gap", "40", "--rig", &format!("udp://{addr}")])
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&ctl.stdout).into_owned();
+    assert!(
+        ctl.status.success(),
+        "controller: {}\n{stdout}\n{}",
+        ctl.status,
+        String::from_utf8_lossy(&ctl.stderr)
+    );
+    stdout
+}
+
 fn finish(child: Child, what: &str) -> String {
     let out = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -96,28 +117,7 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
     let ctl_dir = tmp.path().join("controller");
     let (plant, addr) = serve(&plant_dir, &[]);
     let protocol_path = protocol(tmp.path());
-    let ctl = Command::new(BIN)
-        .args([
-            "controller",
-            &protocol_path,
-            "--seed",
-            "42",
-            "--max-trials",
-            "1",
-        ])
-        .args(LOOSE)
-        .args(["--max-gap", "40", "--rig", &format!("udp://{addr}")])
-        .arg("--out")
-        .arg(&ctl_dir)
-        .output()
-        .unwrap();
-    let ctl_out = String::from_utf8_lossy(&ctl.stdout).into_owned();
-    assert!(
-        ctl.status.success(),
-        "controller: {}\n{ctl_out}\n{}",
-        ctl.status,
-        String::from_utf8_lossy(&ctl.stderr)
-    );
+    let ctl_out = controller(&protocol_path, &addr, &ctl_dir);
     let plant_out = finish(plant, "plant serve");
     assert!(ctl_out.contains("Real-time timing"), "{ctl_out}");
     assert!(plant_out.contains("1 trials recorded"), "{plant_out}");
@@ -279,27 +279,7 @@ fn an_estop_at_the_plant_trips_the_controller_over_udp() {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     let tmp = tempfile::tempdir().unwrap();
     let (plant, addr) = serve(&tmp.path().join("plant"), &["--estop-at-s", "0.3"]);
-    let ctl = Command::new(BIN)
-        .args([
-            "controller",
-            &protocol(tmp.path()),
-            "--seed",
-            "42",
-            "--max-trials",
-            "1",
-        ])
-        .args(LOOSE)
-        .args(["--max-gap", "40", "--rig", &format!("udp://{addr}")])
-        .arg("--out")
-        .arg(tmp.path().join("controller"))
-        .output()
-        .unwrap();
-    let ctl_out = String::from_utf8_lossy(&ctl.stdout).into_owned();
-    assert!(
-        ctl.status.success(),
-        "controller: {}\n{ctl_out}",
-        ctl.status
-    );
+    let ctl_out = controller(&protocol(tmp.path()), &addr, &tmp.path().join("controller"));
     let plant_out = finish(plant, "plant serve");
     // The controller latched on the e-stop (unless a stall tripped it before 0.3 s).
     let report: serde_json::Value = serde_json::from_str(

@@ -173,6 +173,8 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
         assert_eq!(rows.len(), samples, "{entity}");
         assert!(rows.iter().all(|r| r.len() == 2), "{entity}: two lines");
     }
+    // A lock-step rehearsal has no real-time timing to show.
+    assert_eq!(temporal_rows(&chunks, paths::TIMING_WAKE_US), 0);
     // The trials are logged from memory as they are written: the values are exactly the
     // files' (each written value is the double its text parses to).
     let session = Session::read(&session_dir).unwrap();
@@ -465,4 +467,43 @@ fn rehearse_with_a_model_adds_its_rail_friction_to_the_motor_commands() {
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("bad.toml"), "{stderr}");
+}
+
+/// `rehearse --realtime --rerun save=`: the loop's timing is on the timeline, one value
+/// per sample on each of the two entities, and it accounts for the session's `[timing]`:
+/// the held shares of the samples add up to exactly the deadlines the loop missed
+/// (a sample is a block of 4 ticks; shares are multiples of 1/4, exact in f64), and every
+/// latency is under one period (it is measured from the deadline of the tick that is due).
+#[test]
+fn a_real_time_rehearsal_puts_its_clock_on_the_timeline() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("rt");
+    let rrd = dir.path().join("rt.rrd");
+    let stdout = rigtwin(&[
+        "rehearse",
+        "reach-perturb",
+        "--realtime",
+        "--max-trials",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--rerun",
+        &format!("save={}", rrd.display()),
+    ]);
+    assert!(stdout.contains("with loop timing"), "{stdout}");
+    let chunks = recording_chunks(&std::fs::read(rrd).unwrap());
+    let session = Session::read(out.join("S01")).unwrap();
+    let samples = session.trials[0].t_s.len();
+    let timing = session.manifest.timing.unwrap();
+    let wake = scalar_rows(&chunks, paths::TIMING_WAKE_US);
+    let held = scalar_rows(&chunks, paths::TIMING_HELD);
+    assert_eq!(wake.len(), samples);
+    assert_eq!(held.len(), samples);
+    assert!(
+        wake.iter()
+            .all(|r| r.len() == 1 && (0.0..250.0).contains(&r[0]))
+    );
+    assert!(held.iter().all(|r| (0.0..=1.0).contains(&r[0])));
+    let held_ticks: f64 = held.iter().map(|r| r[0] * 4.0).sum();
+    assert_eq!(held_ticks, timing.missed_deadlines as f64, "{timing:?}");
 }

@@ -1,7 +1,7 @@
 //! A counting global allocator, for the tests that prove a real-time path allocates
 //! nothing: register it in the test binary
 //!
-//! ```ignore
+//! ```text
 //! #[global_allocator]
 //! static GLOBAL: rigtwin_device::testing::alloc::Counting = rigtwin_device::testing::alloc::Counting;
 //! ```

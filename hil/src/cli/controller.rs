@@ -3,18 +3,15 @@
 
 use std::io::IsTerminal as _;
 use std::net::{SocketAddr, ToSocketAddrs as _};
-use std::path::PathBuf;
 use std::time::Duration;
 
 use anyhow::Context as _;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigtwin::protocol::Protocol;
-use rigtwin::rehearse;
 use rigtwin::remote::{self, controller};
-use rigtwin::session::SessionWriter;
 use rigtwin_wire::{RigLimits, UdpTransport, WireRig};
 
-use super::link::{LinkArgs, timing_table};
+use super::link::{LinkArgs, SessionArgs, timing_table};
 
 /// Run the rig's own controller in real time against a plant across the wire (the
 /// simulated rig and subject of `rigtwin plant serve`, or a real rig's I/O bridge that
@@ -35,25 +32,12 @@ Output: <out>/session.toml and trials/*.csv (the rig's columns; no ground truth)
 error; the timing), and a timing table (wake-up latency, loop time, missed deadlines)
 plus the link's counters.")]
 pub struct Args {
-    /// Protocol file (TOML), or the name of a shipped protocol.
-    pub protocol: PathBuf,
+    #[command(flatten)]
+    pub session: SessionArgs,
 
     /// The plant: udp://HOST:PORT.
     #[arg(long, value_name = "udp://HOST:PORT")]
     pub rig: String,
-
-    /// Session seed (default: the protocol's `seed`); use the plant's.
-    #[arg(long, value_name = "S")]
-    pub seed: Option<u64>,
-
-    /// Output session folder; must not exist or be empty. Default: a fresh
-    /// `out/<name>-controller-<seed>[-k]/`.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-
-    /// Run only the first N trials of the schedule.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
-    pub max_trials: Option<u32>,
 
     /// How long to wait for the plant's first frame of each trial, s.
     #[arg(long, value_name = "S", default_value_t = 5.0)]
@@ -84,7 +68,8 @@ fn parse_rig(rig: &str) -> anyhow::Result<SocketAddr> {
 /// A bad protocol or argument, an output folder that is not empty, a plant that does
 /// not answer, a socket or writer failure.
 pub fn run(args: &Args) -> anyhow::Result<()> {
-    let protocol = Protocol::load(&args.protocol)?;
+    let (session, out) = args.session.plan("controller", |_| Ok(()))?;
+    let protocol = &session.protocol;
     let peer = parse_rig(&args.rig)?;
     if !(args.connect_timeout_s.is_finite() && args.connect_timeout_s > 0.0) {
         anyhow::bail!(
@@ -92,22 +77,8 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             args.connect_timeout_s
         );
     }
-    let seed = args.seed.unwrap_or(protocol.seed);
-    let out = match &args.out {
-        Some(d) => d.clone(),
-        None => rehearse::fresh_dir(
-            std::path::Path::new("out"),
-            &format!("{}-controller", protocol.name),
-            seed,
-        ),
-    };
-    let subject = protocol.subjects.draw(seed, 1);
-    let mut plans = rehearse::schedule(&protocol, seed, subject.index);
-    if let Some(m) = args.max_trials {
-        plans.truncate(m as usize);
-    }
-    let mut clock = args.link.clock(&protocol)?;
-    let rate = clock_rate(&protocol);
+    let mut clock = args.link.clock(protocol)?;
+    let rate = clock_rate(protocol);
     let local: SocketAddr = if peer.is_ipv4() {
         ([0, 0, 0, 0], 0).into()
     } else {
@@ -123,13 +94,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             max_gap: args.max_gap,
         },
     )?;
-    rehearse::prepare_out(&out)?;
-    let mut manifest = rehearse::manifest(&protocol, &subject, seed);
-    if let Some(sim) = manifest.sim.as_mut() {
-        sim.model = Some(format!("controller across the wire to {peer}"));
-    }
-    let mut writer = SessionWriter::create(&out, manifest)?;
-    let bar = ProgressBar::new(plans.len() as u64);
+    let mut writer =
+        session.open_session(&out, |_| format!("controller across the wire to {peer}"))?;
+    let bar = ProgressBar::new(session.plans.len() as u64);
     if std::io::stderr().is_terminal() {
         bar.set_draw_target(ProgressDrawTarget::stderr());
         if let Ok(style) = ProgressStyle::with_template(
@@ -143,10 +110,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let progress = |done: usize, _total: usize| bar.set_position(done as u64);
     let timeout = Duration::from_secs_f64(args.connect_timeout_s);
     let result = controller::run(
-        &protocol,
-        &subject,
-        seed,
-        &plans,
+        &session,
         &mut rig,
         &mut clock,
         &mut writer,

@@ -1,13 +1,61 @@
-//! What both ends of the wire take on the command line: the link's faults and watchdog,
-//! the real-time requests, and the way a run's clock and link are printed.
+//! What both ends of the wire take on the command line: the session (protocol, seed,
+//! trials, output), the link's faults and watchdog, the real-time requests, and the way
+//! a run's clock is printed.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use rigtwin::cosim::WallClock;
 use rigtwin::protocol::Protocol;
+use rigtwin::rehearse;
+use rigtwin::remote::SessionPlan;
 use rigtwin::report::{SubjectTiming, timing_text};
 use rigtwin::session::Timing;
 use rigtwin_wire::FaultSpec;
+
+/// What both ends run: the protocol, its seed, the trials and where the session goes.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SessionArgs {
+    /// Protocol file (TOML), or the name of a shipped protocol.
+    pub protocol: PathBuf,
+
+    /// Session seed (default: the protocol's `seed`); the same on both ends.
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+
+    /// Output session folder; must not exist or be empty. Default: a fresh
+    /// `out/<name>-<controller|plant>-<seed>[-k]/`.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+
+    /// Run only the first N trials of the schedule.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_trials: Option<u32>,
+}
+
+impl SessionArgs {
+    /// The protocol (`edit` applies a model to it), the session plan, and the output
+    /// folder of this end (`role`: "controller" or "plant").
+    pub fn plan(
+        &self,
+        role: &str,
+        edit: impl FnOnce(&mut Protocol) -> anyhow::Result<()>,
+    ) -> anyhow::Result<(SessionPlan, PathBuf)> {
+        let mut protocol = Protocol::load(&self.protocol)?;
+        edit(&mut protocol)?;
+        let seed = self.seed.unwrap_or(protocol.seed);
+        let out = match &self.out {
+            Some(d) => d.clone(),
+            None => rehearse::fresh_dir(
+                std::path::Path::new("out"),
+                &format!("{}-{role}", protocol.name),
+                seed,
+            ),
+        };
+        let plan = SessionPlan::new(protocol, seed, self.max_trials.map(|m| m as usize))?;
+        Ok((plan, out))
+    }
+}
 
 /// The link and the loop's real-time requests.
 #[derive(Debug, Clone, clap::Args)]

@@ -5,13 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::Context as _;
 use rigtwin::discrepancy::ExtendedModel;
-use rigtwin::protocol::Protocol;
-use rigtwin::rehearse::{self, TICK_HZ};
+use rigtwin::rehearse::TICK_HZ;
 use rigtwin::remote::{self, serve};
-use rigtwin::session::SessionWriter;
 use rigtwin_wire::{PlantEnd, PlantLimits, UdpTransport};
 
-use super::link::{LinkArgs, timing_table};
+use super::link::{LinkArgs, SessionArgs, timing_table};
 
 /// The plant side of hardware in the loop.
 #[derive(Debug, clap::Args)]
@@ -47,25 +45,12 @@ or after --idle-timeout-s without a command (0: never).
 Output: <out>/session.toml and trials/*.csv with the plant's true state (true handle
 position and velocity, the hand's force, the applied motor force), and a timing table.")]
 pub struct ServeArgs {
-    /// Protocol file (TOML), or the name of a shipped protocol.
-    pub protocol: PathBuf,
+    #[command(flatten)]
+    pub session: SessionArgs,
 
     /// Address to listen on, HOST:PORT (port 0: any free port, printed at start).
     #[arg(long, value_name = "HOST:PORT")]
     pub listen: SocketAddr,
-
-    /// Session seed (default: the protocol's `seed`); use the controller's.
-    #[arg(long, value_name = "S")]
-    pub seed: Option<u64>,
-
-    /// Output session folder; must not exist or be empty. Default: a fresh
-    /// `out/<name>-plant-<seed>[-k]/`.
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-
-    /// Serve only the first N trials of the schedule.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
-    pub max_trials: Option<u32>,
 
     /// Stop after this long without a command, s (0: never).
     #[arg(long, value_name = "S", default_value_t = 30.0)]
@@ -108,34 +93,24 @@ fn seconds_to_ticks(flag: &str, s: f64) -> anyhow::Result<u64> {
 /// A bad protocol, model or argument, an output folder that is not empty, a socket that
 /// cannot be bound, a plant that diverges or a writer failure.
 pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
-    let mut protocol = Protocol::load(&args.protocol)?;
-    if let Some(path) = &args.model {
-        ExtendedModel::read(path)?.apply_to(&mut protocol);
-    }
+    let (session, out) = args.session.plan("plant", |protocol| {
+        if let Some(path) = &args.model {
+            ExtendedModel::read(path)?.apply_to(protocol);
+        }
+        Ok(())
+    })?;
+    let protocol = &session.protocol;
+    let seed = session.seed;
     let idle = seconds_to_ticks("--idle-timeout-s", args.idle_timeout_s)?;
     let estop_at_tick = args
         .estop_at_s
         .map(|s| seconds_to_ticks("--estop-at-s", s))
         .transpose()?;
-    let seed = args.seed.unwrap_or(protocol.seed);
-    let out = match &args.out {
-        Some(d) => d.clone(),
-        None => rehearse::fresh_dir(
-            std::path::Path::new("out"),
-            &format!("{}-plant", protocol.name),
-            seed,
-        ),
-    };
-    let subject = protocol.subjects.draw(seed, 1);
-    let mut plans = rehearse::schedule(&protocol, seed, subject.index);
-    if let Some(m) = args.max_trials {
-        plans.truncate(m as usize);
-    }
     let udp = UdpTransport::listen(args.listen)
         .with_context(|| format!("listening on {}", args.listen))?;
     let bound = udp.local_addr()?;
-    let mut clock = args.link.clock(&protocol)?;
-    let rate = super::controller::clock_rate(&protocol);
+    let mut clock = args.link.clock(protocol)?;
+    let rate = super::controller::clock_rate(protocol);
     let transport = remote::with_faults(udp, args.link.faults, args.link.fault_seed, rate);
     let mut end = PlantEnd::new(
         transport,
@@ -143,28 +118,22 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
             stale_ticks: args.link.stale_ticks,
         },
     )?;
-    rehearse::prepare_out(&out)?;
-    let mut manifest = rehearse::manifest(&protocol, &subject, seed);
-    if let Some(sim) = manifest.sim.as_mut() {
-        sim.model = Some(format!(
+    let mut writer = session.open_session(&out, |model| {
+        format!(
             "{} behind the wire (plant serve): the plant's true state",
-            sim.model.as_deref().unwrap_or("rigtwin plant")
-        ));
-    }
-    let mut writer = SessionWriter::create(&out, manifest)?;
+            model.unwrap_or("rigtwin plant")
+        )
+    })?;
     // The address first, on its own line, so a script that asked for port 0 can read it.
     eprintln!("listening on {bound}");
     eprintln!(
         "serving {} trials of {} (seed {seed}); waiting for a controller",
-        plans.len(),
+        session.plans.len(),
         protocol.name
     );
     let mut on_trial = |id: u32| eprintln!("trial {id}");
     let result = serve::serve(
-        &protocol,
-        &subject,
-        seed,
-        &plans,
+        &session,
         &mut end,
         &mut clock,
         &mut writer,

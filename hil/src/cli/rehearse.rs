@@ -246,9 +246,10 @@ fn finish_viewer(
         .with_context(|| format!("finishing --rerun {target}"))?;
     let samples: usize = logged.sessions.iter().map(|s| s.samples).sum();
     let line = format!(
-        "viewer: {} sessions, {samples} samples ({} with muscle activations), {} session estimates, {} onset truths, {} windows, {} safety events; recording {id}",
+        "viewer: {} sessions, {samples} samples ({} with muscle activations, {} with loop timing), {} session estimates, {} onset truths, {} windows, {} safety events; recording {id}",
         logged.sessions.len(),
         logged.activation_samples,
+        logged.timing_samples,
         logged.borner,
         logged.onset_truths,
         logged.windows,

@@ -35,6 +35,12 @@ pub trait Clock {
     /// a missed deadline nor a reason to catch up. Nothing for a clock without
     /// deadlines.
     fn resync(&mut self) {}
+
+    /// The wake-up latency of the tick the last [`Clock::wait`] returned, ns; `None` for
+    /// a clock without deadlines.
+    fn last_wake_latency_ns(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// Lock step: every tick is due at once. Nothing is measured.
@@ -74,6 +80,7 @@ pub struct WallClock {
     longest_run: u64,
     ticks: u64,
     first_miss: Option<Tick>,
+    last_latency_ns: Option<u64>,
 }
 
 /// Largest value the histograms hold, ns (10 s): anything longer is recorded as 10 s.
@@ -110,6 +117,7 @@ impl WallClock {
             longest_run: 0,
             ticks: 0,
             first_miss: None,
+            last_latency_ns: None,
         })
     }
 
@@ -166,6 +174,10 @@ impl Clock for WallClock {
         self.restart();
     }
 
+    fn last_wake_latency_ns(&self) -> Option<u64> {
+        self.last_latency_ns
+    }
+
     fn wait(&mut self, next: Tick, last: Tick) -> Tick {
         let Ok(t) = now_ns() else {
             // CLOCK_MONOTONIC was readable in `new`; it does not go away. Should it, run
@@ -196,6 +208,7 @@ impl Clock for WallClock {
         }
         let latency = woke.saturating_sub(start + due * self.period_ns);
         self.wake.saturating_record(latency.max(1));
+        self.last_latency_ns = Some(latency);
         self.last_wake_ns = Some(woke);
         self.ticks += 1;
         Tick(due)

@@ -173,8 +173,15 @@ pub fn run<P: Plant, C: Clock>(
     let mut n = 0;
     while n < n_ticks {
         let due = clock.wait(Tick(n), Tick(n_ticks - 1)).0.max(n);
+        let paced = clock.last_wake_latency_ns();
         for k in n..due {
+            if paced.is_some() {
+                cosim.recorder.set_tick_timing(0.0, true);
+            }
             cosim.hold(Tick(k))?;
+        }
+        if let Some(ns) = paced {
+            cosim.recorder.set_tick_timing(ns as f64 / 1000.0, false);
         }
         cosim.step(Tick(due))?;
         n = due + 1;

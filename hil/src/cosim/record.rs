@@ -15,8 +15,9 @@ use rigtwin_device::TickReport;
 use super::PlantSample;
 use crate::session::{Column, Trial};
 
-/// Number of channels in a [`Block`]: twelve x/y pairs and the six muscle activations.
-pub const CHANNELS: usize = 24 + MUSCLES;
+/// Number of channels in a [`Block`]: twelve x/y pairs, the six muscle activations and
+/// the loop's timing (wake-up latency, held ticks).
+pub const CHANNELS: usize = 26 + MUSCLES;
 
 /// Channel indices into [`Block::v`].
 pub mod ch {
@@ -48,6 +49,12 @@ pub mod ch {
     /// `rigtwin_arm::muscles::MUSCLE_NAMES` (zero without an arm). Kept in memory for the
     /// viewer; never written to the session table.
     pub const ACTIVATION: usize = 24;
+    /// The wall clock's wake-up latency of the ticks the loop ran, µs (block mean; zero in
+    /// lock step and for held ticks). Kept in memory for the viewer; never written.
+    pub const WAKE_US: usize = 24 + super::MUSCLES;
+    /// The share of the block's ticks that were held (missed deadlines: the controller
+    /// did not run, the plant moved on under the held command). Never written.
+    pub const HELD: usize = WAKE_US + 1;
 }
 
 /// One recorded row: the mean of each channel over its block of ticks.
@@ -69,6 +76,13 @@ impl Block {
     pub fn activations_n(&self) -> [f64; MUSCLES] {
         std::array::from_fn(|i| self.v[ch::ACTIVATION + i])
     }
+
+    /// The loop's timing over the block: mean wake-up latency of the ticks run (µs) and
+    /// the share of ticks held.
+    #[must_use]
+    pub fn timing(&self) -> [f64; 2] {
+        [self.v[ch::WAKE_US], self.v[ch::HELD]]
+    }
 }
 
 /// Accumulates ticks into blocks.
@@ -77,6 +91,7 @@ pub struct Recorder {
     div: u64,
     count: u64,
     sum: [f64; CHANNELS],
+    timing: [f64; 2],
     rows: Vec<Block>,
 }
 
@@ -88,8 +103,15 @@ impl Recorder {
             div: div.max(1),
             count: 0,
             sum: [0.0; CHANNELS],
+            timing: [0.0; 2],
             rows: Vec::with_capacity((n_ticks / div.max(1)) as usize + 1),
         }
+    }
+
+    /// The loop's timing of the next tick [`Recorder::push`] adds: its wake-up latency,
+    /// µs, and whether it was held. Zero unless set, as in lock step.
+    pub fn set_tick_timing(&mut self, wake_us: f64, held: bool) {
+        self.timing = [wake_us, f64::from(u8::from(held))];
     }
 
     /// Adds one tick: the controller's report and the plant's ground truth of the tick
@@ -120,6 +142,9 @@ impl Recorder {
         {
             *s += a;
         }
+        self.sum[ch::WAKE_US] += self.timing[0];
+        self.sum[ch::HELD] += self.timing[1];
+        self.timing = [0.0; 2];
         self.count += 1;
         if self.count == self.div {
             let k = self.div as f64;

@@ -242,6 +242,10 @@ pub struct WrittenTrial<'a> {
     /// `rigtwin_arm::muscles::MUSCLE_NAMES`; block means like the table's rows), `None`
     /// without an arm (the spring-mass rig). Not part of the session files.
     pub activations_n: Option<&'a [[f64; MUSCLES]]>,
+    /// In a real-time rehearsal, the loop's timing per table row: the mean wake-up
+    /// latency of the ticks run, µs, and the share of ticks held (missed deadlines);
+    /// `None` in lock step. Not part of the session files.
+    pub timing: Option<&'a [[f64; 2]]>,
 }
 
 /// Sees a rehearsal as it is written, on the writing thread, in order: for each subject
@@ -399,6 +403,8 @@ struct Done {
     table: Trial,
     result: TrialResult,
     activations_n: Option<Vec<[f64; MUSCLES]>>,
+    /// The loop's timing per row (real-time pacing only).
+    timing_rows: Option<Vec<[f64; 2]>>,
     simulated_s: f64,
     /// The real-time clock's timing of the session so far (real-time pacing only).
     timing: Option<Timing>,
@@ -434,6 +440,7 @@ fn run_trial(
     let activations_n = sim
         .muscles
         .then(|| sim.rows.iter().map(Block::activations_n).collect());
+    let timing_rows = timing.map(|_| sim.rows.iter().map(Block::timing).collect());
     let t_est = protocol.estimate.t_est_s;
     let n_est = (t_est * rate).round() as usize + 1;
     let onset_s = sim.pulse_onset.map(|k| record::tick_time_s(k, div));
@@ -491,6 +498,7 @@ fn run_trial(
         table,
         result,
         activations_n,
+        timing_rows,
         simulated_s,
         timing,
     })
@@ -744,6 +752,7 @@ pub fn rehearse_paced(
                         table,
                         mut result,
                         activations_n,
+                        timing_rows,
                         simulated_s: s,
                         timing: t,
                     } = d;
@@ -759,6 +768,7 @@ pub fn rehearse_paced(
                         table: &table,
                         result: &result,
                         activations_n: activations_n.as_deref(),
+                        timing: timing_rows.as_deref(),
                     });
                     results.push(result);
                     want += 1;

@@ -19,11 +19,11 @@ use std::time::Duration;
 use rigtwin_device::{MotorCommand, RigIo, SensorFrame, Tick, TickReport};
 use rigtwin_wire::{LinkCounters, Transport, WireError, WireRig};
 
-use super::{RemoteError, SessionTicks, trial_id};
+use super::{RemoteError, SessionPlan, SessionTicks, trial_id};
 use crate::cosim::{self, Clock, CoSim, CoSimError, Plant, PlantSample, WallClock};
-use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
+use crate::protocol::ProtocolKind;
 use crate::rehearse::record::{self, Layout};
-use crate::rehearse::{TICK_HZ, TrialPlan, trial, trial_meta};
+use crate::rehearse::{TICK_HZ, trial, trial_meta};
 use crate::session::{SessionWriter, Timing};
 
 /// A plant across the wire, as the co-simulation loop sees it: the controller's end of
@@ -134,19 +134,16 @@ pub struct RemoteRun {
     pub link: LinkCounters,
 }
 
-/// Runs `plans` of `subject` (the schedule of `protocol` with `session_seed`) against the
-/// plant behind `rig`, paced by `clock`, and writes each trial to `writer` as it ends.
-/// `progress(done, total)` is called after every written trial.
+/// Runs the trials of `session` against the plant behind `rig`, paced by `clock`, and
+/// writes each trial to `writer` as it ends. `progress(done, total)` is called after
+/// every written trial.
 ///
 /// # Errors
 /// [`RemoteError`] if the plant does not answer a trial within `timeout`, the protocol
 /// refuses a trial, or the session cannot be written.
 #[allow(clippy::too_many_arguments)]
 pub fn run<T: Transport>(
-    protocol: &Protocol,
-    subject: &VirtualSubject,
-    session_seed: u64,
-    plans: &[TrialPlan],
+    session: &SessionPlan,
     rig: &mut WireRig<SessionTicks<T>>,
     clock: &mut WallClock,
     writer: &mut SessionWriter,
@@ -154,6 +151,13 @@ pub fn run<T: Transport>(
     peer: &str,
     progress: &dyn Fn(usize, usize),
 ) -> Result<RemoteRun, RemoteError> {
+    let SessionPlan {
+        protocol,
+        subject,
+        seed: session_seed,
+        plans,
+    } = session;
+    let session_seed = *session_seed;
     let rate = f64::from(protocol.recording.rate_hz);
     let layout = Layout {
         truth: false,

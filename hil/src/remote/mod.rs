@@ -37,9 +37,71 @@ use rigtwin_wire::{
     WireError,
 };
 
+use std::path::Path;
+
 use crate::cosim::CoSimError;
-use crate::rehearse::RehearseError;
-use crate::session::SessionError;
+use crate::protocol::{Protocol, VirtualSubject};
+use crate::rehearse::{self, RehearseError, TrialPlan};
+use crate::session::{SessionError, SessionWriter};
+
+/// What both ends run: the protocol, its first subject and the schedule drawn with the
+/// session seed (the same on both ends, so that trial `k` is the same trial).
+#[derive(Debug, Clone)]
+pub struct SessionPlan {
+    /// The protocol.
+    pub protocol: Protocol,
+    /// Subject 1 of the protocol's population with `seed`.
+    pub subject: VirtualSubject,
+    /// The session seed.
+    pub seed: u64,
+    /// The trials, in order (the schedule, cut to the first `max_trials`).
+    pub plans: Vec<TrialPlan>,
+}
+
+impl SessionPlan {
+    /// The schedule of subject 1 of `protocol` with `seed`, its first `max_trials` trials.
+    ///
+    /// # Errors
+    /// [`RemoteError::TooManyTrials`] if the schedule has more trials than the wire numbers.
+    pub fn new(
+        protocol: Protocol,
+        seed: u64,
+        max_trials: Option<usize>,
+    ) -> Result<SessionPlan, RemoteError> {
+        let subject = protocol.subjects.draw(seed, 1);
+        let mut plans = rehearse::schedule(&protocol, seed, subject.index);
+        if let Some(m) = max_trials {
+            plans.truncate(m);
+        }
+        for p in &plans {
+            trial_id(p.index, plans.len())?;
+        }
+        Ok(SessionPlan {
+            protocol,
+            subject,
+            seed,
+            plans,
+        })
+    }
+
+    /// Creates the session folder `out` (refusing one that is not empty) and its writer,
+    /// the manifest's model described by `model` from the rehearsal's description.
+    ///
+    /// # Errors
+    /// [`RemoteError`] from the folder or the writer.
+    pub fn open_session(
+        &self,
+        out: &Path,
+        model: impl FnOnce(Option<&str>) -> String,
+    ) -> Result<SessionWriter, RemoteError> {
+        rehearse::prepare_out(out)?;
+        let mut manifest = rehearse::manifest(&self.protocol, &self.subject, self.seed);
+        if let Some(sim) = manifest.sim.as_mut() {
+            sim.model = Some(model(sim.model.as_deref()));
+        }
+        Ok(SessionWriter::create(out, manifest)?)
+    }
+}
 
 /// The transport both ends use: UDP with a seeded fault injector on its sending side
 /// (`none` injects nothing), on the session's clock.

@@ -27,12 +27,11 @@ use std::sync::mpsc;
 use rigtwin_device::{MotorCommand, RigIo, SensorFrame, Tick, TickReport};
 use rigtwin_wire::{LinkCounters, PlantEnd, Transport};
 
-use super::{RemoteError, trial_id};
+use super::{RemoteError, SessionPlan};
 use crate::cosim::record::{Block, Layout, Recorder};
 use crate::cosim::{Clock, SimPlant};
-use crate::protocol::{Protocol, VirtualSubject};
 use crate::rehearse::record::to_trial;
-use crate::rehearse::{TICK_HZ, TrialPlan, trial, trial_meta};
+use crate::rehearse::{TICK_HZ, trial, trial_meta};
 use crate::session::{SessionWriter, TrialMeta};
 
 /// How a serve run ends and what it presses.
@@ -91,27 +90,23 @@ struct Running {
     estop_pressed_at: Option<u64>,
 }
 
-/// Serves `plans` (the schedule of `protocol` with `session_seed`, for `subject`) through
-/// `end` on `clock`, writing each trial's true plant state to `writer` as it ends.
-/// `on_trial(id)` is called when a trial is set up. The session is written on a thread
-/// of its own, so that no file is created, written or synced inside the loop.
+/// Serves the trials of `session` through `end` on `clock`, writing each trial's true
+/// plant state to `writer` as it ends. `on_trial(id)` is called when a trial is set up.
+/// The session is written on a thread of its own, so that no file is created, written
+/// or synced inside the loop.
 ///
 /// # Errors
 /// [`RemoteError`] if a trial cannot be built, the plant diverges, the socket fails or
 /// the session cannot be written.
-#[allow(clippy::too_many_arguments)]
 pub fn serve<T: Transport, C: Clock>(
-    protocol: &Protocol,
-    subject: &VirtualSubject,
-    session_seed: u64,
-    plans: &[TrialPlan],
+    session: &SessionPlan,
     end: &mut PlantEnd<T>,
     clock: &mut C,
     writer: &mut SessionWriter,
     options: ServeOptions,
     on_trial: &mut dyn FnMut(u32),
 ) -> Result<ServeReport, RemoteError> {
-    let rate = f64::from(protocol.recording.rate_hz);
+    let rate = f64::from(session.protocol.recording.rate_hz);
     let layout = Layout {
         truth: true,
         position_perturbation: false,
@@ -124,17 +119,7 @@ pub fn serve<T: Transport, C: Clock>(
             }
             Ok(())
         });
-        let served = serve_loop(
-            protocol,
-            subject,
-            session_seed,
-            plans,
-            end,
-            clock,
-            &tx,
-            options,
-            on_trial,
-        );
+        let served = serve_loop(session, end, clock, &tx, options, on_trial);
         drop(tx);
         let written = written.join().unwrap_or(Err(RemoteError::WriterPanicked));
         // A writer error is the cause of anything the loop saw after it.
@@ -143,23 +128,23 @@ pub fn serve<T: Transport, C: Clock>(
     })
 }
 
-#[allow(clippy::too_many_arguments)]
 fn serve_loop<T: Transport, C: Clock>(
-    protocol: &Protocol,
-    subject: &VirtualSubject,
-    session_seed: u64,
-    plans: &[TrialPlan],
+    session: &SessionPlan,
     end: &mut PlantEnd<T>,
     clock: &mut C,
     tx: &mpsc::Sender<(TrialMeta, Vec<Block>)>,
     options: ServeOptions,
     on_trial: &mut dyn FnMut(u32),
 ) -> Result<ServeReport, RemoteError> {
+    let SessionPlan {
+        protocol,
+        subject,
+        seed: session_seed,
+        plans,
+    } = session;
+    let session_seed = *session_seed;
     let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
     let n_ticks = trial::trial_ticks(protocol);
-    for p in plans {
-        trial_id(p.index, plans.len())?;
-    }
     let mut report = ServeReport {
         end: ServeEnd::Idle,
         recorded: Vec::with_capacity(plans.len()),

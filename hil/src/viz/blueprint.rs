@@ -158,6 +158,8 @@ fn layout() -> Node {
                     ),
                     series("Arm angles (deg)", "/plots/arm"),
                     series("Muscle activations (N)", "/plots/muscles"),
+                    series("Wake-up latency (µs)", "/plots/timing/wake_latency_us"),
+                    series("Held ticks (share)", "/plots/timing/held"),
                     series("Response (mm)", "/plots/response"),
                 ],
             ),

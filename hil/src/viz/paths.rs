@@ -23,6 +23,9 @@
 //! plots/arm/angles_deg    per sample  degrees, lines shoulder and elbow
 //! plots/muscles/activations_n  per sample  N, six lines SF SE EF EE BF BE (rehearsals only:
 //!                                      the simulated arm's, not in the session files)
+//! plots/timing/wake_latency_us  per sample  µs, the real-time loop's wake-up latency (mean
+//!                                      of the sample's ticks; `rehearse --realtime` only)
+//! plots/timing/held        per sample  share of the sample's ticks held (missed deadlines)
 //! plots/response/{x,y}_mm  per perturbed trial, 150 ms after onset, mm
 //! ellipses/<name>/outline  the image of the unit circle under the matrix (scaled)
 //! ellipses/<name>/axes     its principal semi-axes, labelled with the matrix
@@ -98,6 +101,11 @@ pub const MUSCLE_ACTIVATIONS_N: &str = "plots/muscles/activations_n";
 /// Names of the six lines of [`MUSCLE_ACTIVATIONS_N`], in the order of the scalars in each
 /// row: shoulder, elbow and biarticular flexor and extensor.
 pub const MUSCLE_NAMES: [&str; MUSCLES] = rigtwin_arm::muscles::MUSCLE_NAMES;
+
+/// The real-time loop's wake-up latency per sample, µs (one line).
+pub const TIMING_WAKE_US: &str = "plots/timing/wake_latency_us";
+/// The share of a sample's ticks the real-time loop held (missed deadlines), 0-1.
+pub const TIMING_HELD: &str = "plots/timing/held";
 
 /// Prefix of the measured channels in an overlay.
 pub const MEASURED: &str = "measured";

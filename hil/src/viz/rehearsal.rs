@@ -31,6 +31,8 @@ pub struct RehearsalLogged {
     pub sessions: Vec<Logged>,
     /// Samples with the arm's muscle activations, all subjects.
     pub activation_samples: usize,
+    /// Samples with the real-time loop's timing, all subjects (real-time rehearsals).
+    pub timing_samples: usize,
     /// Börner session estimates drawn.
     pub borner: usize,
     /// Ground-truth ellipses drawn at perturbation onsets.
@@ -159,6 +161,10 @@ impl<'v> RehearsalLogger<'v> {
             self.viewer
                 .log_activations(&span, &trial.table.t_s, activations)?;
             self.out.activation_samples += activations.len();
+        }
+        if let Some(timing) = trial.timing {
+            self.viewer.log_timing(&span, &trial.table.t_s, timing)?;
+            self.out.timing_samples += timing.len();
         }
         let id = subject.id.clone();
         self.out.safety_events += self.log_safety(&id, trial.result, &span)?;

@@ -101,6 +101,9 @@ fn level_name(level: EventLevel) -> &'static str {
 /// Colours of the x and y lines of a series.
 const XY_RGB: [[u8; 3]; 2] = [[230, 85, 60], [50, 120, 220]];
 
+/// Colours of the wake-up latency and the held share.
+const TIMING_RGB: [[u8; 3]; 2] = [[90, 90, 90], [220, 60, 160]];
+
 /// Colours of the shoulder and elbow angles.
 const ARM_ANGLES_RGB: [[u8; 3]; 2] = [[120, 90, 200], [60, 170, 120]];
 
@@ -544,6 +547,40 @@ impl Viewer {
             &times,
             picks.iter().flat_map(|&i| activations_n[i]),
         )
+    }
+
+    /// Logs a real-time loop's timing over a trial (per sample: the mean wake-up latency of
+    /// the ticks run, µs, and the share of ticks held) as [`paths::TIMING_WAKE_US`] and
+    /// [`paths::TIMING_HELD`]. `t_s` is the trial's time column.
+    pub fn log_timing(
+        &mut self,
+        span: &TrialSpan,
+        t_s: &[f64],
+        timing: &[[f64; 2]],
+    ) -> Result<(), VizError> {
+        if timing.len() != t_s.len() {
+            return Err(VizError::ColumnLength {
+                column: "timing",
+                len: timing.len(),
+                expected: t_s.len(),
+            });
+        }
+        let Some((picks, times)) = self.picks(span, t_s) else {
+            return Ok(());
+        };
+        for (k, path) in [paths::TIMING_WAKE_US, paths::TIMING_HELD]
+            .into_iter()
+            .enumerate()
+        {
+            self.send_series(
+                path,
+                [path.rsplit('/').next().unwrap_or(path)],
+                [TIMING_RGB[k]],
+                &times,
+                picks.iter().map(|&i| timing[i][k]),
+            )?;
+        }
+        Ok(())
     }
 
     /// Draws a 2x2 matrix `m` (row-major; a stiffness `K` in N/m, a damping `D` in N s/m) as
