@@ -1,12 +1,10 @@
 //! `rigtwin controller`: the rig's controller running a protocol's trials in real time
 //! against a plant across the wire, recording the session as the rig records it.
 
-use std::io::IsTerminal as _;
 use std::net::{SocketAddr, ToSocketAddrs as _};
 use std::time::Duration;
 
 use anyhow::Context as _;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigtwin::protocol::Protocol;
 use rigtwin::remote::{self, controller};
 use rigtwin_wire::{RigLimits, UdpTransport, WireRig};
@@ -96,17 +94,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     )?;
     let mut writer =
         session.open_session(&out, |_| format!("controller across the wire to {peer}"))?;
-    let bar = ProgressBar::new(session.plans.len() as u64);
-    if std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials",
-        ) {
-            bar.set_style(style);
-        }
-    } else {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let bar = super::trial_bar(
+        session.plans.len() as u64,
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials",
+    );
     let progress = |done: usize, _total: usize| bar.set_position(done as u64);
     let timeout = Duration::from_secs_f64(args.connect_timeout_s);
     let result = controller::run(

@@ -76,6 +76,23 @@ pub enum Command {
     View(view::Args),
 }
 
+/// A progress bar of `len` trials on stderr with `template`, hidden when stderr is not
+/// a terminal (a log file gets no bar).
+pub fn trial_bar(len: u64, template: &str) -> indicatif::ProgressBar {
+    use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+    use std::io::IsTerminal as _;
+    let bar = ProgressBar::new(len);
+    if std::io::stderr().is_terminal() {
+        bar.set_draw_target(ProgressDrawTarget::stderr());
+        if let Ok(style) = ProgressStyle::with_template(template) {
+            bar.set_style(style);
+        }
+    } else {
+        bar.set_draw_target(ProgressDrawTarget::hidden());
+    }
+    bar
+}
+
 /// Runs the parsed command line.
 ///
 /// # Errors

@@ -1,12 +1,10 @@
 //! `rigtwin rehearse`: run a protocol against virtual subjects, record their sessions,
 //! and print and write the rehearsal report.
 
-use std::io::IsTerminal as _;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::Context as _;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options, Progress};
@@ -137,17 +135,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         m.min(protocol.trials_per_subject())
     });
     let total = per_subject * options.subjects as usize;
-    let bar = ProgressBar::new(total as u64);
-    if std::io::stderr().is_terminal() {
-        bar.set_draw_target(ProgressDrawTarget::stderr());
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials  {msg}",
-        ) {
-            bar.set_style(style);
-        }
-    } else {
-        bar.set_draw_target(ProgressDrawTarget::hidden());
-    }
+    let bar = super::trial_bar(
+        total as u64,
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials  {msg}",
+    );
     let progress = |p: Progress| {
         bar.set_position(p.done as u64);
         bar.set_message(format!("{:.0} s simulated", p.simulated_s));

@@ -151,13 +151,8 @@ pub fn run<T: Transport>(
     peer: &str,
     progress: &dyn Fn(usize, usize),
 ) -> Result<RemoteRun, RemoteError> {
-    let SessionPlan {
-        protocol,
-        subject,
-        seed: session_seed,
-        plans,
-    } = session;
-    let session_seed = *session_seed;
+    let (protocol, subject, plans) = (&session.protocol, &session.subject, &session.plans);
+    let session_seed = session.seed;
     let rate = f64::from(protocol.recording.rate_hz);
     let layout = Layout {
         truth: false,

@@ -136,13 +136,8 @@ fn serve_loop<T: Transport, C: Clock>(
     options: ServeOptions,
     on_trial: &mut dyn FnMut(u32),
 ) -> Result<ServeReport, RemoteError> {
-    let SessionPlan {
-        protocol,
-        subject,
-        seed: session_seed,
-        plans,
-    } = session;
-    let session_seed = *session_seed;
+    let (protocol, subject, plans) = (&session.protocol, &session.subject, &session.plans);
+    let session_seed = session.seed;
     let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
     let n_ticks = trial::trial_ticks(protocol);
     let mut report = ServeReport {
