@@ -82,3 +82,48 @@ fn a_stalled_link_trips_the_controller_within_the_watchdog() {
         sim.controller().events().last()
     );
 }
+
+/// The e-stop across the wire, in lock step: pressed at the plant at tick 6000 (1.5 s,
+/// mid-reach, the motors pushing), the sensor frame of that tick carries it, the
+/// controller trips on reading it and its fault command is taken up by the plant in the
+/// same tick: the applied force is zero from tick 6000 on, within one tick of the press.
+#[test]
+fn an_estop_at_the_plant_zeroes_its_force_within_one_tick() {
+    let protocol = Protocol::builtin("reach-perturb").unwrap();
+    let subject = protocol.subjects.draw(42, 1);
+    let plan = &schedule(&protocol, 42, 1)[0];
+    let p = trial::parts(&protocol, &subject, 42, plan, true).unwrap();
+    let (c, e) = channel_pair(8);
+    let wired = WiredPlant::new(
+        WireRig::new(c, RigLimits::default()).unwrap(),
+        PlantEnd::new(e, PlantLimits::default()).unwrap(),
+        p.plant,
+    );
+    let mut sim = CoSim::new(p.controller, p.driver, wired, p.recorder);
+    let press = 6000;
+    let mut pushing_before = false;
+    for n in 0..press + 40 {
+        if n == press {
+            sim.plant_mut().sim_mut().rig_mut().set_estop(true);
+        }
+        let r = sim.step(Tick(n)).unwrap();
+        let applied = sim.plant().end().applied_force(Tick(n));
+        if n == press - 1 {
+            pushing_before = applied != [0.0, 0.0];
+            assert_eq!(r.mode, Mode::Active);
+        }
+        if n >= press {
+            assert_eq!(r.mode, Mode::Fault, "tick {n}");
+            assert_eq!(
+                applied,
+                [0.0, 0.0],
+                "tick {n}: the plant still applies force"
+            );
+        }
+    }
+    assert!(pushing_before, "the motors were pushing before the press");
+    assert_eq!(
+        sim.finish().extremes.trip.map(|(k, why)| (k, why)),
+        Some((press, "EStop".to_owned()))
+    );
+}

@@ -73,6 +73,11 @@ impl<C: Transport, P: Transport> WiredPlant<C, P> {
     pub fn sim(&self) -> &SimPlant {
         &self.sim
     }
+
+    /// The simulated plant, e.g. to press its e-stop.
+    pub fn sim_mut(&mut self) -> &mut SimPlant {
+        &mut self.sim
+    }
 }
 
 impl<C: Transport, P: Transport> RigIo for WiredPlant<C, P> {
