@@ -2,5 +2,5 @@
 //! so every build that includes them — `cargo run -- rehearse …` as much as
 //! `cargo test --workspace` with all its dev-dependencies — resolves the same features
 //! for the crates listed in its `Cargo.toml`, and one build serves both commands.
-//! `device`, `arm`, `world` and `hil/wire` do not depend on it, so a rig-side build of
+//! `device`, `arm`, `world`, `hil/session` and `hil/wire` do not depend on it, so a rig-side build of
 //! the controller alone stays small. cargo-hakari writes the list; see `Cargo.toml`.

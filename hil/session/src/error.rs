@@ -149,9 +149,9 @@ pub enum SessionError {
         /// Line of the `trial.sha256` key in the manifest.
         line: usize,
         /// Digest in the manifest.
-        expected: crate::session::Sha256,
+        expected: crate::Sha256,
         /// Digest of the file.
-        actual: crate::session::Sha256,
+        actual: crate::Sha256,
     },
 
     /// A perturbation's onset is not within the trial's time span.

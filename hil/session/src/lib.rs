@@ -1,4 +1,11 @@
-//! Sessions: the recording format, version 1 (`shared/specs/recording-format.md`).
+//! rigtwin-session — sessions: the recording format, version 1
+//! (`shared/specs/recording-format.md`), and [`replay::ReplayRig`], a recorded session as
+//! a rig.
+//!
+//! This crate is the contract between whatever records a session and whatever reads
+//! one: a rig-side logger, the diagnosis and the `rigtwin` application all depend on it
+//! without depending on each other, and it knows nothing of the simulator, protocols or
+//! the viewer (it depends on `rigtwin-device` for the `RigIo` boundary only).
 //!
 //! A session is a directory with `session.toml` (the [`Manifest`]) and one CSV table
 //! per trial (a [`Trial`], stored as column vectors). [`Session::read`] reads all of it;
@@ -10,6 +17,7 @@
 
 mod error;
 mod manifest;
+pub mod replay;
 mod table;
 mod writer;
 

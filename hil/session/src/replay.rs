@@ -8,7 +8,7 @@
 
 use rigtwin_device::{ErrorKind, MotorCommand, Rate, RigIo, RigIoError, SensorFrame, Tick};
 
-use crate::session::Trial;
+use crate::Trial;
 
 /// How samples between two file rows are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

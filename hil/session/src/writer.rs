@@ -271,7 +271,7 @@ impl SessionWriter {
     ///
     /// # Errors
     /// [`SessionError`] if the manifest cannot be written.
-    pub fn set_timing(&mut self, timing: crate::session::Timing) -> Result<(), SessionError> {
+    pub fn set_timing(&mut self, timing: crate::Timing) -> Result<(), SessionError> {
         self.manifest.timing = Some(timing);
         self.write_manifest()
     }

@@ -11,8 +11,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
-use rigtwin::session::{
-    self, Channels, Device, Manifest, Sample, Session, SessionWriter, Source, Subject, TrialKind,
+use rigtwin_session::{
+    Channels, Device, Manifest, Sample, Session, SessionWriter, Source, Subject, TrialKind,
     TrialMeta,
 };
 
@@ -186,13 +186,13 @@ fn kill_after_n_samples_loses_at_most_10_ms() {
         assert_eq!(before.trials.len() as u64, (n - 1) / ROWS, "killed at {n}");
         check_prefix(&before);
 
-        let recovered = session::recover(&dir).unwrap();
+        let recovered = rigtwin_session::recover(&dir).unwrap();
         let after = Session::read(&dir).unwrap();
         let kept = check_prefix(&after);
         assert!(kept <= n && kept + LOSS >= n, "killed at {n}: kept {kept}");
         assert!(recovered.len() <= 1);
         // Recovery is idempotent.
-        assert!(session::recover(&dir).unwrap().is_empty());
+        assert!(rigtwin_session::recover(&dir).unwrap().is_empty());
         assert_eq!(Session::read(&dir).unwrap(), after);
     }
 }
@@ -214,7 +214,7 @@ fn kill_at_random_instants_always_leaves_a_readable_session() {
             continue;
         }
         check_prefix(&Session::read(&dir).unwrap());
-        session::recover(&dir).unwrap();
+        rigtwin_session::recover(&dir).unwrap();
         check_prefix(&Session::read(&dir).unwrap());
     }
 }

@@ -5,11 +5,11 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use rigtwin::session::{Session, SessionError};
+use rigtwin_session::{Session, SessionError};
 
 fn shared(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/recordings")
+        .join("../../../shared/recordings")
         .join(name)
 }
 

@@ -4,11 +4,11 @@
 
 use std::path::PathBuf;
 
-use rigtwin::session::{Amplitude, PerturbationKind, Session, Source, TrialKind};
+use rigtwin_session::{Amplitude, PerturbationKind, Session, Source, TrialKind};
 
 fn shared(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/recordings")
+        .join("../../../shared/recordings")
         .join(name)
 }
 

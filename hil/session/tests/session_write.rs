@@ -5,20 +5,20 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use rigtwin::replay::{Interpolation, ReplayError, ReplayRig};
-use rigtwin::session::{
+use rigtwin_device::{ErrorKind, MotorCommand, RigIo, RigIoError, Tick};
+use rigtwin_session::replay::{Interpolation, ReplayError, ReplayRig};
+use rigtwin_session::{
     Channels, Device, Manifest, Sample, Session, SessionError, SessionWriter, SimInfo, Source,
     Subject, Trial, TrialKind, TrialMeta,
 };
-use rigtwin_device::{ErrorKind, MotorCommand, RigIo, RigIoError, Tick};
 
 fn shared(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../shared/recordings")
+        .join("../../../shared/recordings")
         .join(name)
 }
 
-fn meta_of(e: &rigtwin::session::TrialEntry) -> TrialMeta {
+fn meta_of(e: &rigtwin_session::TrialEntry) -> TrialMeta {
     TrialMeta {
         id: e.id,
         kind: e.kind.clone(),
