@@ -123,7 +123,7 @@ fn an_estop_at_the_plant_zeroes_its_force_within_one_tick() {
     }
     assert!(pushing_before, "the motors were pushing before the press");
     assert_eq!(
-        sim.finish().extremes.trip.map(|(k, why)| (k, why)),
+        sim.finish().extremes.trip,
         Some((press, "EStop".to_owned()))
     );
 }
