@@ -5,6 +5,9 @@
 //! The test re-runs its own binary as the child that rehearses (the `child` test,
 //! which does nothing unless `RIGTWIN_CRASH_CHILD_DIR` is set) and kills it.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+// The crash tests wait before killing a rehearsal at a random moment: a relative sleep
+// is what they mean.
+#![allow(clippy::disallowed_methods)]
 
 use std::path::Path;
 use std::process::{Command, Stdio};

@@ -5,6 +5,9 @@
 //! The writer runs in a child process: this test binary itself, re-run with
 //! `RIGTWIN_CRASH_DIR` set, which makes `child_writer` write instead of returning.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
+// The crash tests wait for a child process to get going before killing it: a relative
+// sleep is what they mean.
+#![allow(clippy::disallowed_methods)]
 
 use std::path::Path;
 use std::process::{Command, Stdio};

@@ -30,7 +30,7 @@ use super::signals::BalanceSignals;
 /// A candidate plant effect: a family of linear least-squares problems, one per
 /// setting of its nonlinear parameter (pitch, delay, angle, smoothing velocity).
 ///
-/// Every candidate is [`Designed`]: it writes each setting once as a [`Design`], and its
+/// Every candidate is `Designed`: it writes each setting once as a `Design`, and its
 /// Grams and residuals follow from that by default (ripple and rotation override
 /// `grams` with faster sums over the same rows). Outside this crate the trait is sealed:
 /// `Designed` cannot be named there.
@@ -102,7 +102,7 @@ pub fn residual_rows(
 }
 
 /// The nominal balance's target `u(t − latency) + F` on the evaluated rows of `axis`,
-/// and the normaliser `u` there (one axis of [`Design::nominal`]).
+/// and the normaliser `u` there (one axis of `Design::nominal`).
 #[must_use]
 pub fn nominal_target(sig: &BalanceSignals, axis: usize, latency_s: f64) -> (Vec<f64>, Vec<f64>) {
     let Design {

@@ -62,7 +62,7 @@ pub const PLANT_SIDE: [&str; 4] = [
 pub struct DiagnoseOptions {
     /// Number of cross-validation folds (whole trials; fewer if the session is short).
     /// The hand balance on opposite pulse pairs leaves one unit out instead (see
-    /// [`super::hand`]).
+    /// `super::hand`).
     pub folds: usize,
     /// Family-wise false-alarm level of the fold t-test.
     pub alpha: f64,
@@ -181,7 +181,7 @@ pub struct Diagnosis {
     /// D, K and delayed feedback), normalised by the hand's response force; both
     /// weighted as in [`Self::hand_weighting`].
     pub hand_baseline_nrmse: Option<f64>,
-    /// The hand balance's row weighting ([`super::hand::Whitening`]): the correlation
+    /// The hand balance's row weighting (`super::hand::Whitening`): the correlation
     /// time filtered out, ms, and the matrix `W` between the axes, row-major.
     pub hand_weighting: BTreeMap<String, f64>,
     /// Where the weighting's `W` comes from: `repetitions` (the spread of the

@@ -524,7 +524,7 @@ pub fn whitened_rows(
     });
 }
 
-/// One trial's Grams at every setting, from the weighted rows ([`whitened_rows`]).
+/// One trial's Grams at every setting, from the weighted rows (`whitened_rows`).
 #[must_use]
 pub fn hand_grams(
     c: &dyn HandCandidate,
@@ -542,7 +542,7 @@ pub fn hand_grams(
 }
 
 /// Per row (axes interleaved: x then y of each evaluated sample): target, fit,
-/// normaliser; weighted by `w` ([`whitened_rows`], which drops the first sample) or not.
+/// normaliser; weighted by `w` (`whitened_rows`, which drops the first sample) or not.
 #[must_use]
 pub fn hand_fit_rows(
     c: &dyn HandCandidate,
@@ -805,7 +805,7 @@ impl std::fmt::Debug for HandFit {
     }
 }
 
-/// The significance test's cross-validation on independent units ([`OddUnits::Replicates`]),
+/// The significance test's cross-validation on independent units (`OddUnits::Replicates`),
 /// at the feedback delay of the main fit.
 #[derive(Debug)]
 pub struct ReplicateTest {
@@ -830,11 +830,11 @@ impl ReplicateTest {
 #[derive(Debug)]
 pub struct HandJudgement {
     /// The units fitted: the odd parts of the mean responses to opposite pulses
-    /// ([`odd_parts`]), or the responses averaged by direction when the session has too
-    /// few opposite pairs ([`average_by_angle`]).
+    /// (`odd_parts`), or the responses averaged by direction when the session has too
+    /// few opposite pairs (`average_by_angle`).
     pub responses: Vec<HandResponse>,
     /// The test on independent units, when the units above average repetitions
-    /// ([`OddUnits::Averaged`]); `None` when the units are already independent, and
+    /// (`OddUnits::Averaged`); `None` when the units are already independent, and
     /// then the folds above carry the test.
     pub replicates: Option<ReplicateTest>,
     /// Folds over [`Self::responses`].

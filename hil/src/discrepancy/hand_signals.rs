@@ -68,7 +68,7 @@ pub struct HandArm {
     pub params: ArmParams,
     /// Shoulder, rig frame, m.
     pub shoulder_m: [f64; 2],
-    /// `Aᵀ diag(w) A` with `w` the [`odd_part_weights`], m² (joint space).
+    /// `Aᵀ diag(w) A` with `w` the `odd_part_weights`, m² (joint space).
     pub ata: Matrix2<f64>,
 }
 
@@ -163,7 +163,7 @@ pub struct HandResponse {
     /// Unperturbed trials in the reference (summed over the averaged trials).
     pub references: usize,
     /// The perturbed trials averaged into this response (one unless
-    /// [`average_by_angle`] merged repetitions).
+    /// `average_by_angle` merged repetitions).
     pub trials: Vec<u32>,
 }
 

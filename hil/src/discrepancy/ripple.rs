@@ -94,7 +94,7 @@ impl Candidate for ForceRipple {
     }
     /// All pitches in one pass over the rows: `e^{i 2π k q}` for `k = k0 + j dk` by a
     /// rotation recurrence over `j` (one `sin_cos` per row instead of one per pitch).
-    /// Equal to [`Designed::design`]'s Gram at every setting (a unit test checks it).
+    /// Equal to `Designed::design`'s Gram at every setting (a unit test checks it).
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
         let nominal = Design::nominal(sig, latency_s);
         let mut grams = vec![Gram::new(4); self.n];

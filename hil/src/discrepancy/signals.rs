@@ -65,7 +65,7 @@ pub struct BalanceSignals {
     pub u: [Vec<f64>; 2],
     /// Sensor force (hand on handle, through the sensor) through the balance filter, N.
     pub f: [Vec<f64>; 2],
-    /// The balance filter's taps ([`balance_filter`]).
+    /// The balance filter's taps (`balance_filter`).
     pub force_taps: Vec<f64>,
     /// Evaluated sample indices.
     pub rows: Vec<usize>,

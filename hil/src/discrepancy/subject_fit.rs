@@ -439,7 +439,7 @@ fn nelder_mead(
     (simplex[0].0, simplex[0].1, evals)
 }
 
-/// Fits the baseline subject of `protocol` (as [`super::replay::session_protocol`] makes
+/// Fits the baseline subject of `protocol` (as `super::replay::session_protocol` makes
 /// it) to `session`; see the module docs.
 ///
 /// # Errors

@@ -26,7 +26,7 @@
 //! Timelines: `tick` (4 kHz control ticks since the start of the session, trials back to
 //! back), `time` (seconds on the same axis) and `trial` (the trial's index). Nothing is
 //! stamped with the wall clock, chunk and row ids come from a counter and the recording id is
-//! given by the caller, so a saved file is the same bytes every time (see [`Viewer`]).
+//! given by the caller, so a saved file is the same bytes every time (see [`crate::viz::Viewer`]).
 
 mod blueprint;
 mod columns;
