@@ -1,7 +1,9 @@
 //! The control clock. Every time in this crate is a whole number of 4 kHz ticks;
 //! seconds are derived from a tick count by one division, never accumulated.
 
-/// Rate of the rig's control clock \[Hz\].
+/// Rate of the rig's control clock \[Hz\]: `rigtwin_device::Rate::CONTROL`, restated
+/// because the arm must not depend on the rig's code; `tests/tests/one_clock.rs` holds
+/// the two equal.
 pub const TICK_HZ: u64 = 4000;
 
 /// Seconds corresponding to a tick count \[s\].

@@ -23,15 +23,15 @@ use rapier2d_f64::prelude::{
 use rigtwin_arm::dynamics::JointState;
 use rigtwin_arm::kinematics::{self, Elbow};
 use rigtwin_arm::params::ArmParams;
-use rigtwin_device::{MotorCommand, RigIo, SensorFrame, Tick};
+use rigtwin_device::{MotorCommand, Rate, RigIo, SensorFrame, Tick};
 
 use crate::config::{Attachment, Grasp, GripCompliance, RigConfig};
 use crate::effects::{DelayLine, SensorModel, friction_force_n, ripple_force_n};
 use crate::endstop::RailStops;
 use crate::error::WorldError;
 
-/// The control tick, s (4 kHz, 000_* section 5.1).
-pub const TICK_S: f64 = 1.0 / 4000.0;
+/// The control tick, s: the period of [`Rate::CONTROL`] (4 kHz, 000_* section 5.1).
+pub const TICK_S: f64 = 1.0 / Rate::CONTROL.hz() as f64;
 
 /// Rotational inertia given to the carts and the handle, kg m². Their rotation is
 /// locked by the rails, so the value only conditions the solver.

@@ -48,8 +48,9 @@ use crate::session::{
 use record::{Block, Layout, ch};
 pub use trial::{Extremes, OnsetTruth, TrialPlan, TrialTask};
 
-/// The control clock of the simulator, Hz (000_* section 5.1).
-pub const TICK_HZ: u64 = 4000;
+/// The control clock of the simulator, Hz: [`rigtwin_device::Rate::CONTROL`] (000_*
+/// section 5.1), as the integer the rehearsal's tick arithmetic uses.
+pub const TICK_HZ: u64 = rigtwin_device::Rate::CONTROL.hz() as u64;
 
 /// The `created` stamp of simulated sessions: fixed, so that a session's bytes depend on
 /// the protocol and the seed only.

@@ -59,8 +59,8 @@ pub use session::{ARM_ANGLE_COLUMNS, Logged, log_session, log_session_at, record
 pub use target::{RerunArgs, Target, TargetParseError};
 pub use viewer::{DEFAULT_LIVE_RATE_HZ, Viewer};
 
-/// The rate of the `tick` timeline: the 4 kHz control clock.
-pub const TICK_HZ: f64 = 4000.0;
+/// The rate of the `tick` timeline: the 4 kHz control clock, [`rigtwin_device::Rate::CONTROL`].
+pub const TICK_HZ: f64 = rigtwin_device::Rate::CONTROL.hz() as f64;
 
 /// What can go wrong while streaming to the viewer or writing an `.rrd`.
 #[derive(Debug, thiserror::Error)]
