@@ -43,6 +43,12 @@ pub fn joint_to_endpoint(
     Ok(ji.transpose() * joint * ji)
 }
 
+/// The arm's inertia at the hand, `J⁻ᵀ M(q) J⁻¹` (operational-space inertia), kg: the
+/// one definition every room uses. Errors at a kinematic singularity.
+pub fn endpoint_inertia(p: &ArmParams, q: [f64; 2]) -> Result<Matrix2<f64>, ArmError> {
+    joint_to_endpoint(p, q, &crate::dynamics::mass_matrix(p, q))
+}
+
 /// Endpoint impedance with stiffness scale `scale` (see [`crate::params::StiffnessDrift`]).
 pub fn endpoint_impedance_scaled(
     p: &ArmParams,

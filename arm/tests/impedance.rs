@@ -6,7 +6,9 @@ use approx::assert_relative_eq;
 use nalgebra::{Matrix2, Vector2};
 use proptest::prelude::*;
 use rigtwin_arm::dynamics::{forward_dynamics, mass_matrix};
-use rigtwin_arm::impedance::{endpoint_impedance, joint_to_endpoint, principal_axes};
+use rigtwin_arm::impedance::{
+    endpoint_impedance, endpoint_inertia, joint_to_endpoint, principal_axes,
+};
 use rigtwin_arm::kinematics::{Elbow, forward, inverse, jacobian};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
 use rigtwin_arm::params::ArmParams;
@@ -93,6 +95,9 @@ proptest! {
         let acc = jacobian(&p, q) * forward_dynamics(&p, q, [0.0, 0.0], [tau.x, tau.y]);
         let mx = endpoint_impedance(&p, q, &[0.0; MUSCLES]).unwrap().mass_kg;
         prop_assert!((mx * acc - f).norm() < 1e-9);
+        // The one endpoint inertia the other rooms use is this same matrix.
+        let m = endpoint_inertia(&p, q).unwrap();
+        prop_assert!((m * acc - f).norm() < 1e-9);
         prop_assert!(mx.determinant() > 0.0);
     }
 }

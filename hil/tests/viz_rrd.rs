@@ -165,7 +165,7 @@ fn log_synthetic(viewer: &mut Viewer, data: &Synthetic) {
             });
         }
         let span = viewer.log_trial(&meta, &cols).unwrap();
-        let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Right);
+        let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Down);
         assert_eq!(arm.out_of_reach, 0);
         viewer.log_arm(&span, &data.t, &arm.columns()).unwrap();
         last = Some(span);
@@ -239,7 +239,7 @@ fn every_sample_lands_on_its_entity() {
     // Each x/y pair is one entity with two named lines; every sample of each column lands,
     // exactly (f64), on its line, trial after trial.
     let twice = |c: &[f64]| [c, c].concat();
-    let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Right);
+    let arm = viz::two_link_inverse([0.0, -0.425], 0.33, 0.34, &data.x, &data.y, Elbow::Down);
     let deg = |c: &[f64]| twice(&c.iter().map(|r| r.to_degrees()).collect::<Vec<_>>());
     let recorded = [
         (paths::POSITION, paths::XY, [twice(&data.x), twice(&data.y)]),

@@ -12,7 +12,7 @@
 //! one substep or at rest but not while the load changes within a substepped tick
 //! (`tests/rigio.rs` measures up to 0.44 N apart with four substeps).
 
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::Vector2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -591,15 +591,6 @@ impl SimRig {
         // Positions are bounded by the rail stops, so the cast cannot saturate.
         [(x / q).floor() as i64, (y / q).floor() as i64]
     }
-}
-
-/// The mass matrix `J⁻ᵀ M(q) J⁻¹` of the arm seen at the hand (operational-space
-/// inertia), kg. Public for the reduced model and the tests.
-#[must_use]
-pub fn arm_endpoint_inertia(params: &ArmParams, q: [f64; 2]) -> Option<Matrix2<f64>> {
-    let j = kinematics::jacobian(params, q);
-    let ji = j.try_inverse()?;
-    Some(ji.transpose() * rigtwin_arm::dynamics::mass_matrix(params, q) * ji)
 }
 
 fn integration_parameters(cfg: &RigConfig) -> IntegrationParameters {

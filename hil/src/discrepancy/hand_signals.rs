@@ -32,8 +32,8 @@
 //! before it for the delayed terms.
 
 use nalgebra::{Matrix2, Vector2};
-use rigtwin_arm::dynamics::mass_matrix;
-use rigtwin_arm::kinematics::{Elbow, inverse, jacobian};
+use rigtwin_arm::impedance::{endpoint_inertia, joint_to_endpoint};
+use rigtwin_arm::kinematics::{Elbow, inverse};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
 use rigtwin_arm::params::ArmParams;
 use rigtwin_device::signal::{EdgeMode, gradient, savgol_filter};
@@ -105,9 +105,8 @@ impl HandArm {
             hand_rig_m[1] - self.shoulder_m[1],
         );
         let q = inverse(&self.params, p, Elbow::Down).ok()?;
-        let ji = jacobian(&self.params, q).try_inverse()?;
-        let m = ji.transpose() * mass_matrix(&self.params, q) * ji;
-        let s = ji.transpose() * self.ata * ji;
+        let m = endpoint_inertia(&self.params, q).ok()?;
+        let s = joint_to_endpoint(&self.params, q, &self.ata).ok()?;
         Some((m, s))
     }
 }

@@ -3,8 +3,6 @@
 //! inertia as the a-priori `M_BSP`.
 
 use nalgebra::Vector2;
-use rigtwin_arm::dynamics::mass_matrix;
-use rigtwin_arm::impedance::joint_to_endpoint;
 use rigtwin_arm::kinematics::{Elbow, inverse};
 use rigtwin_arm::params::ArmParams;
 use rigtwin_device::estimate::{
@@ -86,7 +84,7 @@ pub fn endpoint_inertia(
 ) -> Result<Mat2, rigtwin_arm::ArmError> {
     let rel = Vector2::new(hand_m[0] - shoulder_m[0], hand_m[1] - shoulder_m[1]);
     let q = inverse(arm, rel, Elbow::Down)?;
-    let m = joint_to_endpoint(arm, q, &mass_matrix(arm, q))?;
+    let m = rigtwin_arm::impedance::endpoint_inertia(arm, q)?;
     Ok([[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]])
 }
 

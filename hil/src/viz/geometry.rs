@@ -6,18 +6,15 @@ use nalgebra::Matrix2;
 
 use super::columns::ArmTrajectory;
 
-/// Which side of the shoulder–hand line the elbow is on, seen from above (+z up).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Elbow {
-    /// Elbow to the right of the line from shoulder to hand (positive elbow flexion): the
-    /// natural posture of a right arm.
-    Right,
-    /// Elbow to the left (negative elbow angle): a left arm.
-    Left,
-}
+/// Which elbow solution: the arm's own (`Elbow::Down`, positive elbow flexion, is the
+/// right arm's posture; `Elbow::Up` its mirror).
+pub use rigtwin_arm::kinematics::Elbow;
 
 /// Two-link inverse kinematics of a hand path (law of cosines), for sessions that record the
 /// handle but not the arm.
+///
+/// It is not `rigtwin_arm::kinematics::inverse`, which refuses a hand out of reach: a
+/// picture of a measured session must still draw every sample, so this one clamps.
 ///
 /// `shoulder_m` in the rig frame, segment lengths in m. Angles: shoulder from +x toward +y,
 /// elbow relative to the upper arm. A hand out of reach (farther than `upper + fore` or nearer
@@ -45,7 +42,7 @@ pub fn two_link_inverse(
             arm.out_of_reach += 1;
         }
         let mut q2 = cos_q2.clamp(-1.0, 1.0).acos();
-        if elbow == Elbow::Left {
+        if elbow == Elbow::Up {
             q2 = -q2;
         }
         let q1 = dy.atan2(dx) - (l2 * q2.sin()).atan2(l1 + l2 * q2.cos());
@@ -197,7 +194,7 @@ mod tests {
             0.34,
             &[0.0, 0.05],
             &[0.0, -0.1],
-            Elbow::Right,
+            Elbow::Down,
         );
         assert_eq!(arm.out_of_reach, 0);
         for i in 0..2 {
@@ -223,7 +220,7 @@ mod tests {
 
     #[test]
     fn unreachable_hand_stretches_the_arm_and_is_counted() {
-        let arm = two_link_inverse([0.0, 0.0], 0.3, 0.3, &[1.0], &[0.0], Elbow::Right);
+        let arm = two_link_inverse([0.0, 0.0], 0.3, 0.3, &[1.0], &[0.0], Elbow::Down);
         assert_eq!(arm.out_of_reach, 1);
         assert_relative_eq!(arm.hand_x_m[0], 0.6, epsilon = 1e-12);
         assert_relative_eq!(arm.elbow_rad[0], 0.0, epsilon = 1e-12);

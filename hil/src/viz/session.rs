@@ -166,7 +166,7 @@ pub(crate) fn log_session_trial(
                 l2,
                 &trial.x_m,
                 &trial.y_m,
-                Elbow::Right,
+                Elbow::Down,
             );
             logged.out_of_reach += arm.out_of_reach;
             viewer.log_arm(&span, &trial.t_s, &arm.columns())?;
