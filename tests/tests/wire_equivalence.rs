@@ -10,8 +10,25 @@ use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{schedule, trial};
 use rigtwin_device::{Mode, Tick};
 use rigtwin_wire::{
-    FaultInjector, FaultSpec, Faulty, PlantEnd, PlantLimits, RigLimits, WireRig, channel_pair,
+    ChannelEnd, FaultInjector, FaultSpec, Faulty, PlantEnd, PlantLimits, RigLimits, WireRig,
+    channel_pair,
 };
+
+/// The trial `plan` (seed 42) with its plant behind a fault-free in-process wire.
+fn wired(
+    protocol: &Protocol,
+    subject: &rigtwin::protocol::VirtualSubject,
+    plan: &rigtwin::rehearse::TrialPlan,
+) -> CoSim<WiredPlant<ChannelEnd, ChannelEnd>> {
+    let p = trial::parts(protocol, subject, 42, plan, true).unwrap();
+    let (c, e) = channel_pair(8);
+    let wired = WiredPlant::new(
+        WireRig::new(c, RigLimits::default()).unwrap(),
+        PlantEnd::new(e, PlantLimits::default()).unwrap(),
+        p.plant,
+    );
+    CoSim::new(p.controller, p.driver, wired, p.recorder)
+}
 
 /// Six trials of the reach protocol (perturbed and unperturbed, seed 42, subject 1):
 /// the wired rows equal the lock-step rows bit for bit (doubles cross the wire as their
@@ -22,14 +39,7 @@ fn a_fault_free_wire_gives_the_lock_step_rows() {
     let subject = protocol.subjects.draw(42, 1);
     for plan in schedule(&protocol, 42, 1).iter().take(6) {
         let lock = trial::simulate(&protocol, &subject, 42, plan, true).unwrap();
-        let p = trial::parts(&protocol, &subject, 42, plan, true).unwrap();
-        let (c, e) = channel_pair(8);
-        let wired = WiredPlant::new(
-            WireRig::new(c, RigLimits::default()).unwrap(),
-            PlantEnd::new(e, PlantLimits::default()).unwrap(),
-            p.plant,
-        );
-        let mut sim = CoSim::new(p.controller, p.driver, wired, p.recorder);
+        let mut sim = wired(&protocol, &subject, plan);
         cosim::run(&mut sim, &mut LockStep, trial::trial_ticks(&protocol)).unwrap();
         let counters = sim.plant().rig().counters();
         let wired = sim.finish();
@@ -92,14 +102,7 @@ fn an_estop_at_the_plant_zeroes_its_force_within_one_tick() {
     let protocol = Protocol::builtin("reach-perturb").unwrap();
     let subject = protocol.subjects.draw(42, 1);
     let plan = &schedule(&protocol, 42, 1)[0];
-    let p = trial::parts(&protocol, &subject, 42, plan, true).unwrap();
-    let (c, e) = channel_pair(8);
-    let wired = WiredPlant::new(
-        WireRig::new(c, RigLimits::default()).unwrap(),
-        PlantEnd::new(e, PlantLimits::default()).unwrap(),
-        p.plant,
-    );
-    let mut sim = CoSim::new(p.controller, p.driver, wired, p.recorder);
+    let mut sim = wired(&protocol, &subject, plan);
     let press = 6000;
     let mut pushing_before = false;
     for n in 0..press + 40 {
