@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::config::Checker;
+use crate::check::Checker;
 
 /// The force sensor's calibration: `F_rig = matrix · (F_raw − offset_n)`.
 ///

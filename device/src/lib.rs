@@ -88,6 +88,7 @@
 
 pub mod admittance;
 pub mod calib;
+pub mod check;
 pub mod config;
 pub mod controller;
 pub mod estimate;

@@ -10,7 +10,7 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::config::{Checker, ConfigError};
+use crate::check::{Checker, ConfigError};
 
 /// The force-pulse protocol of 000_* section 4: every angle repeated, each perturbed
 /// movement paired with unperturbed ones, all in random order.
