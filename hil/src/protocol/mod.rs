@@ -15,6 +15,7 @@
 //! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
 
 mod error;
+pub mod seed;
 pub mod subjects;
 
 use std::path::{Path, PathBuf};
@@ -506,7 +507,7 @@ impl Protocol {
             );
         }
         let rate = self.recording.rate_hz;
-        if rate == 0 || !crate::rehearse::TICK_HZ.is_multiple_of(u64::from(rate)) {
+        if rate == 0 || !rigtwin_device::Rate::CONTROL.hz().is_multiple_of(rate) {
             c.fail(
                 "recording.rate_hz",
                 format!("must divide the 4000 Hz control clock, got {rate}"),

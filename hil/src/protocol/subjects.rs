@@ -141,7 +141,7 @@ impl SubjectsConfig {
                 factors: [1.0; 5],
             };
         }
-        let mut rng = ChaCha8Rng::seed_from_u64(crate::rehearse::seed::mix(&[
+        let mut rng = ChaCha8Rng::seed_from_u64(super::seed::mix(&[
             session_seed,
             0x5B7E_C7D0,
             u64::from(index),

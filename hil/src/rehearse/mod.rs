@@ -24,7 +24,8 @@
 //! ```
 
 pub use crate::cosim::record;
-pub mod seed;
+/// Seed derivation lives with the protocol, which draws its subjects from it.
+pub use crate::protocol::seed;
 pub mod trial;
 
 use std::collections::BTreeMap;
