@@ -5,7 +5,6 @@ use std::net::{SocketAddr, ToSocketAddrs as _};
 use std::time::Duration;
 
 use anyhow::Context as _;
-use rigtwin::protocol::Protocol;
 use rigtwin::remote::{self, controller};
 use rigtwin_wire::{RigLimits, UdpTransport, WireRig};
 
@@ -76,7 +75,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let mut clock = args.link.clock(protocol)?;
-    let rate = clock_rate(protocol);
+    let rate = protocol.control_rate();
     let local: SocketAddr = if peer.is_ipv4() {
         ([0, 0, 0, 0], 0).into()
     } else {
@@ -167,12 +166,4 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     println!("session: {}", out.display());
     Ok(())
-}
-
-/// The protocol's control rate.
-pub fn clock_rate(protocol: &Protocol) -> rigtwin_device::Rate {
-    protocol
-        .controller
-        .control_rate()
-        .unwrap_or(rigtwin_device::Rate::CONTROL)
 }

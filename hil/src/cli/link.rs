@@ -102,11 +102,10 @@ impl LinkArgs {
         {
             eprintln!("{note}");
         }
-        let rate = protocol
-            .controller
-            .control_rate()
-            .unwrap_or(rigtwin_device::Rate::CONTROL);
-        Ok(WallClock::new(rate, Duration::from_micros(self.spin_us))?)
+        Ok(WallClock::new(
+            protocol.control_rate(),
+            Duration::from_micros(self.spin_us),
+        )?)
     }
 }
 

@@ -110,7 +110,7 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
         .with_context(|| format!("listening on {}", args.listen))?;
     let bound = udp.local_addr()?;
     let mut clock = args.link.clock(protocol)?;
-    let rate = super::controller::clock_rate(protocol);
+    let rate = protocol.control_rate();
     let transport = remote::with_faults(udp, args.link.faults, args.link.fault_seed, rate);
     let mut end = PlantEnd::new(
         transport,

@@ -148,6 +148,12 @@ impl WallClock {
         self.first_miss = None;
     }
 
+    /// The period between deadlines.
+    #[must_use]
+    pub fn period(&self) -> Duration {
+        Duration::from_nanos(self.period_ns)
+    }
+
     /// The first tick of this run whose deadline was missed (skipped), if any: up to it
     /// the run was paced exactly.
     #[must_use]

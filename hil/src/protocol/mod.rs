@@ -476,6 +476,15 @@ impl Protocol {
         self.calibration.clone().unwrap_or_default()
     }
 
+    /// The controller's control clock (4 kHz on the Börner rig). A loaded protocol's rate
+    /// is validated non-zero; the fallback is the rig's clock.
+    #[must_use]
+    pub fn control_rate(&self) -> rigtwin_device::Rate {
+        self.controller
+            .control_rate()
+            .unwrap_or(rigtwin_device::Rate::CONTROL)
+    }
+
     /// Number of trials per subject.
     #[must_use]
     pub fn trials_per_subject(&self) -> usize {

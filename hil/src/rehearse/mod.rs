@@ -819,11 +819,8 @@ fn realtime_clock(
     protocol: &Protocol,
     rt: RealTime,
 ) -> Result<(WallClock, Option<String>), RehearseError> {
-    let rate = protocol
-        .controller
-        .control_rate()
-        .unwrap_or(rigtwin_device::Rate::CONTROL);
-    let clock = WallClock::new(rate, rt.spin).map_err(|e| RehearseError::Clock(e.to_string()))?;
+    let clock = WallClock::new(protocol.control_rate(), rt.spin)
+        .map_err(|e| RehearseError::Clock(e.to_string()))?;
     let note = rt
         .fifo_priority
         .and_then(|p| crate::cosim::rt::set_fifo_priority(p).err());

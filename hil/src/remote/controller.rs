@@ -82,8 +82,7 @@ pub fn await_plant<T: Transport>(
     rig.begin_trial(trial);
     rig.set_mode(rigtwin_device::Mode::Configured);
     clock.restart();
-    let period_ns = 1_000_000_000 / TICK_HZ;
-    let last = u64::try_from(timeout.as_nanos() / u128::from(period_ns))
+    let last = u64::try_from(timeout.as_nanos() / clock.period().as_nanos().max(1))
         .unwrap_or(u64::MAX)
         .max(1);
     let mut n = 0;
