@@ -175,11 +175,15 @@ fn serve_loop<T: Transport, C: Clock>(
         for k in s..=due {
             let now = Tick(k);
             ran += 1;
-            if end.poll_command(now)?.is_some() {
-                last_command_at = k;
-            }
-            // 1. The trial the controller names.
-            let asked = end.latest_command().map_or(0, |c| c.trial);
+            // 1. The trial the controller names, read from each fresh command (the held
+            // one asks nothing new).
+            let asked = match end.poll_command(now)? {
+                Some(c) => {
+                    last_command_at = k;
+                    c.trial
+                }
+                None => 0,
+            };
             if asked != 0 && asked != end.trial() {
                 match plans.iter().position(|p| p.index + 1 == u32::from(asked)) {
                     Some(i) => {
