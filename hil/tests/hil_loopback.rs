@@ -16,7 +16,7 @@
 
 use std::io::{BufRead as _, BufReader};
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Command, Output, Stdio};
 
 use rigtwin::session::Session;
 
@@ -78,25 +78,23 @@ fn controller(protocol: &str, addr: &str, out: &Path) -> String {
         .arg(out)
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&ctl.stdout).into_owned();
+    succeeded(ctl, "controller")
+}
+
+/// The standard output of a process that must have succeeded (`what` names it).
+fn succeeded(out: Output, what: &str) -> String {
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
-        ctl.status.success(),
-        "controller: {}\n{stdout}\n{}",
-        ctl.status,
-        String::from_utf8_lossy(&ctl.stderr)
+        out.status.success(),
+        "{what} failed: {}\n{stdout}\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
     );
     stdout
 }
 
 fn finish(child: Child, what: &str) -> String {
-    let out = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
-    assert!(
-        out.status.success(),
-        "{what} failed: {}\n{stdout}",
-        out.status
-    );
-    stdout
+    succeeded(child.wait_with_output().unwrap(), what)
 }
 
 fn column<'a>(t: &'a rigtwin::session::Trial, name: &str) -> &'a [f64] {
@@ -226,13 +224,7 @@ fn the_python_pd_client_holds_the_served_handle() {
         .args([script, "--plant", &addr, "--seconds", "2"])
         .output()
         .unwrap();
-    let py_out = String::from_utf8_lossy(&py.stdout).into_owned();
-    assert!(
-        py.status.success(),
-        "pd_client: {}\n{py_out}\n{}",
-        py.status,
-        String::from_utf8_lossy(&py.stderr)
-    );
+    let py_out = succeeded(py, "pd_client");
     let plant_out = finish(plant, "plant serve");
     let number = |key: &str| -> f64 {
         py_out
