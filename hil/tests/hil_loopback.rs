@@ -182,11 +182,7 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
         .arg(&lock_dir)
         .output()
         .unwrap();
-    assert!(
-        lock.status.success(),
-        "{}",
-        String::from_utf8_lossy(&lock.stderr)
-    );
+    succeeded(lock, "rehearse");
     let l = Session::read(lock_dir.join("S01")).unwrap();
     let (_, lt) = l.trial(1).unwrap();
     let dev = lt.y_m[..exact]
