@@ -5,6 +5,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 2 /tmp/q --no-motor-noise
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/r --repetitions 9
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/s --repetitions 9 --pulse 0.05,30
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/i --ideal
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -14,24 +15,27 @@
 //! subject and effect; `--repetitions N` gives N pulses per angle (default 3, the
 //! shared sessions'); `--pulse SECONDS,NEWTONS` sets the force pulse's duration and
 //! amplitude (default the protocol's 0.15 s, 15 N; `Design::reflex_study` is
-//! `--repetitions 9 --pulse 0.05,30`). Prints the session folder and what it hides.
+//! `--repetitions 9 --pulse 0.05,30`); `--ideal` drops the rig's and subject's nuisances
+//! (on by default: a lab's rig). Prints the session folder and what it hides.
 
 use rigtwin_tests::generator::{Design, EFFECTS, generate_design, parse_pulse};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
     let mut motor_noise = true;
     let mut repetitions = None;
     let mut pulse = None;
+    let mut ideal = false;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
             "--no-motor-noise" => motor_noise = false,
+            "--ideal" => ideal = true,
             "--repetitions" => {
                 let n = args
                     .next()
@@ -67,6 +71,9 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     }
     design.motor_noise = motor_noise;
     design.pulse = pulse;
+    if ideal {
+        design.nuisance = None;
+    }
     let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);

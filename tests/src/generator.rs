@@ -7,7 +7,11 @@
 //! sensor noise and encoder quantum, recorded at 1 kHz as 4-tick block means like the
 //! shared emulated rig, without ground-truth columns. The hidden effect is drawn from
 //! the catalog, plant side or human side, with parameters in realistic ranges ([`draw`]).
-//! The layout ([`Design`]) is the shared sessions' by default (32 reaches, 24 pulses of
+//! Every session has, by default, the nuisances of a lab's rig and subject
+//! ([`Design::nuisance`]: sensor offset and drift, motor gain tolerance and current
+//! noise, reaches varying in reaction time, duration and end points, impedance drifting
+//! over the session), `none` included, so that a diagnosis is tested on sessions like a
+//! lab's. The layout ([`Design`]) is the shared sessions' by default (32 reaches, 24 pulses of
 //! 150 ms); more and briefer pulses make a session like a lab's reflex study
 //! ([`Design::reflex_study`]), to measure how the diagnosis gains with them.
 
@@ -18,6 +22,7 @@ use std::sync::atomic::AtomicBool;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rigtwin::protocol::Protocol;
+use rigtwin::protocol::nuisance::NuisanceConfig;
 use rigtwin::rehearse::{self, Options};
 use rigtwin_arm::params::StretchReflex;
 use rigtwin_device::config::ForcePulseConfig;
@@ -179,6 +184,10 @@ pub struct Design {
     pub motor_noise: bool,
     /// The force pulse; `None` keeps the protocol's (000_*: 150 ms, 15 N).
     pub pulse: Option<ForcePulseConfig>,
+    /// The rig's and subject's nuisances (sensor offset and drift, motor gain and
+    /// noise, reaches varying in time and place, impedance drifting): a lab's rig by
+    /// default ([`NuisanceConfig::REALISTIC`]); `None` is the ideal rig.
+    pub nuisance: Option<NuisanceConfig>,
 }
 
 impl Design {
@@ -189,6 +198,7 @@ impl Design {
         repetitions: 3,
         motor_noise: true,
         pulse: None,
+        nuisance: Some(NuisanceConfig::REALISTIC),
     };
 
     /// `repetitions` pulses per angle in a session of the shared proportion (a quarter
@@ -201,6 +211,7 @@ impl Design {
             repetitions,
             motor_noise: true,
             pulse: None,
+            nuisance: Some(NuisanceConfig::REALISTIC),
         }
     }
 
@@ -305,6 +316,7 @@ pub fn generate_design(
     if !design.motor_noise {
         protocol.subjects.arm.noise.activation_cv = 0.0;
     }
+    protocol.nuisance = design.nuisance;
     let options = Options {
         subjects: 1,
         seed,

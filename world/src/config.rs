@@ -41,6 +41,61 @@ pub struct RigConfig {
     pub attachment: Attachment,
     /// Optional non-ideal effects, all off by default.
     pub effects: PlantEffects,
+    /// The small imperfections every real rig has (offset, gain tolerance, motor
+    /// noise): not effects a diagnosis should name, all off by default.
+    pub nuisance: RigNuisance,
+}
+
+/// The imperfections of one trial of a real rig, as realised values (a protocol draws
+/// them per session and per trial). None of them is a catalog effect: a diagnosis must
+/// fit them as part of the nominal model and never name them.
+///
+/// - the force sensor's reading carries `sensor_offset_n` on top of the true force
+///   (an imperfect tare, plus the drift since it);
+/// - the motor force is `motor_gain · command` per axis (force constant tolerance);
+/// - a band-limited current-loop noise of `motor_noise_rms_n` RMS (first-order
+///   low-pass of white noise at `motor_noise_bw_hz`) adds to the motor force; it is
+///   not in the logged command.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RigNuisance {
+    /// Offset of the force reading per axis, N (sensor frame).
+    pub sensor_offset_n: [f64; 2],
+    /// Ratio of the motor force to its command per axis (1 is nominal).
+    pub motor_gain: [f64; 2],
+    /// RMS of the current-loop noise on each motor, N (0 disables it).
+    pub motor_noise_rms_n: f64,
+    /// Bandwidth of that noise, Hz.
+    pub motor_noise_bw_hz: f64,
+}
+
+impl Default for RigNuisance {
+    fn default() -> Self {
+        RigNuisance {
+            sensor_offset_n: [0.0; 2],
+            motor_gain: [1.0; 2],
+            motor_noise_rms_n: 0.0,
+            motor_noise_bw_hz: 200.0,
+        }
+    }
+}
+
+impl RigNuisance {
+    /// Checks that gains are positive and the noise's RMS and bandwidth usable.
+    ///
+    /// # Errors
+    /// [`WorldError::InvalidConfig`] naming the key.
+    pub fn validate(&self) -> Result<(), WorldError> {
+        for g in self.motor_gain {
+            positive("nuisance.motor_gain", g)?;
+        }
+        non_negative("nuisance.motor_noise_rms_n", self.motor_noise_rms_n)?;
+        positive("nuisance.motor_noise_bw_hz", self.motor_noise_bw_hz)?;
+        for o in self.sensor_offset_n {
+            finite("nuisance.sensor_offset_n", o)?;
+        }
+        Ok(())
+    }
 }
 
 impl Default for RigConfig {
@@ -58,6 +113,7 @@ impl Default for RigConfig {
             solver: SolverConfig::default(),
             attachment: Attachment::default(),
             effects: PlantEffects::default(),
+            nuisance: RigNuisance::default(),
         }
     }
 }
@@ -318,6 +374,7 @@ impl RigConfig {
                 ),
             });
         }
+        self.nuisance.validate()?;
         match &self.attachment {
             Attachment::Arm {
                 shoulder_m, arm, ..

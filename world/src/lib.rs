@@ -101,7 +101,7 @@ pub mod error;
 pub mod reduced;
 pub mod rig;
 
-pub use config::{Attachment, Grasp, PlantEffects, RigConfig, SolverConfig};
+pub use config::{Attachment, Grasp, PlantEffects, RigConfig, RigNuisance, SolverConfig};
 pub use error::WorldError;
 pub use reduced::ReducedPlant;
 pub use rig::{SimRig, StepTruth, TICK_S};

@@ -13,7 +13,7 @@
 //! (`tests/rigio.rs` measures up to 0.44 N apart with four substeps).
 
 use nalgebra::Vector2;
-use rand::SeedableRng;
+use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use rapier2d_f64::prelude::{
@@ -78,6 +78,54 @@ pub struct StepTruth {
     pub handle_acc_m_per_s2: [f64; 2],
 }
 
+/// The current loop's noise on both motors: white Gaussian noise through a first-order
+/// low-pass, scaled so that its stationary RMS is the configured one and started from
+/// its stationary distribution. Off (no draws) when the RMS is 0.
+#[derive(Debug, Clone)]
+struct MotorNoise {
+    rng: Option<ChaCha8Rng>,
+    /// `y += α (x − y)`.
+    alpha: f64,
+    /// Standard deviation of the white input giving the stationary RMS.
+    input_sd: f64,
+    rms: f64,
+    state: [f64; 2],
+}
+
+impl MotorNoise {
+    fn new(n: &crate::config::RigNuisance, dt_s: f64, rng: &mut ChaCha8Rng) -> MotorNoise {
+        let alpha = 1.0 - (-2.0 * std::f64::consts::PI * n.motor_noise_bw_hz * dt_s).exp();
+        // Stationary variance of y_{k+1} = (1 − α) y_k + α x_k with var x = s²:
+        // α² s² / (1 − (1 − α)²) = α s² / (2 − α).
+        let input_sd = n.motor_noise_rms_n * ((2.0 - alpha) / alpha).sqrt();
+        let mut noise = MotorNoise {
+            rng: (n.motor_noise_rms_n > 0.0).then(|| ChaCha8Rng::seed_from_u64(rng.next_u64())),
+            alpha,
+            input_sd,
+            rms: n.motor_noise_rms_n,
+            state: [0.0; 2],
+        };
+        if let Some(r) = &mut noise.rng {
+            for s in &mut noise.state {
+                let z: f64 = StandardNormal.sample(r);
+                *s = noise.rms * z;
+            }
+        }
+        noise
+    }
+
+    fn sample(&mut self) -> [f64; 2] {
+        let Some(r) = &mut self.rng else {
+            return [0.0; 2];
+        };
+        for s in &mut self.state {
+            let z: f64 = StandardNormal.sample(r);
+            *s += self.alpha * (self.input_sd * z - *s);
+        }
+        self.state
+    }
+}
+
 /// The simulated manipulandum with its arm (or calibration rig).
 pub struct SimRig {
     cfg: RigConfig,
@@ -92,6 +140,7 @@ pub struct SimRig {
     delay: DelayLine,
     sensor: SensorModel,
     rng: ChaCha8Rng,
+    motor_noise: MotorNoise,
     tick: u64,
     command_n: [f64; 2],
     estop: bool,
@@ -279,6 +328,10 @@ impl SimRig {
             .actuation_delay
             .map_or(0, |d| (d.delay_ms * 1e-3 / TICK_S).round() as usize);
         let sensor = SensorModel::new(cfg.effects.sensor.as_ref(), TICK_S);
+        let mut rng = rng;
+        // The motor noise has its own stream, split off only when it is on, so that a
+        // rig without it draws its sensor noise exactly as before.
+        let motor_noise = MotorNoise::new(&cfg.nuisance, TICK_S, &mut rng);
         let mut rig = SimRig {
             world,
             lower,
@@ -291,6 +344,7 @@ impl SimRig {
             delay: DelayLine::new(delay_ticks),
             sensor,
             rng,
+            motor_noise,
             tick: 0,
             command_n: [0.0; 2],
             estop: false,
@@ -365,8 +419,13 @@ impl SimRig {
         let y_rel = up_pos.y - lo_pos.y;
         let y_rel_vel = up_vel.y - lo_vel.y;
 
-        // Motor: delay, then cogging by each cart's own rail position.
+        // Motor: delay, the force constant's tolerance and the current loop's noise,
+        // then cogging by each cart's own rail position.
         let mut motor = self.delay.push(self.command_n);
+        let noise = self.motor_noise.sample();
+        for a in 0..2 {
+            motor[a] = motor[a] * self.cfg.nuisance.motor_gain[a] + noise[a];
+        }
         if let Some(r) = &self.cfg.effects.force_ripple {
             motor[0] += ripple_force_n(r, lo_pos.x);
             motor[1] += ripple_force_n(r, y_rel);
@@ -463,6 +522,9 @@ impl SimRig {
 
     fn sample_sensor(&mut self, true_n: [f64; 2]) -> [f64; 2] {
         let mut r = self.sensor.sample(true_n);
+        for (x, o) in r.iter_mut().zip(self.cfg.nuisance.sensor_offset_n) {
+            *x += o;
+        }
         if self.cfg.force_noise_rms_n > 0.0 {
             for x in &mut r {
                 let z: f64 = StandardNormal.sample(&mut self.rng);

@@ -15,6 +15,7 @@
 //! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
 
 mod error;
+pub mod nuisance;
 pub mod seed;
 pub mod subjects;
 
@@ -108,6 +109,10 @@ pub struct Protocol {
     /// Estimator settings for the report.
     #[serde(default)]
     pub estimate: EstimateConfig,
+    /// A realistic rig and subject: the ranges of the per-session and per-trial
+    /// nuisances ([`nuisance`]); absent, the rig and the subject are ideal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nuisance: Option<nuisance::NuisanceConfig>,
 }
 
 fn default_seed() -> u64 {
@@ -290,6 +295,10 @@ pub struct PlantConfig {
     pub solver: SolverConfig,
     /// Non-ideal plant effects (all off by default).
     pub effects: PlantEffects,
+    /// The rig's nuisances as realised values; set per trial from the protocol's
+    /// `[nuisance]` ranges ([`nuisance::realise`]), off by default.
+    #[serde(skip)]
+    pub nuisance: rigtwin_world::RigNuisance,
 }
 
 impl Default for PlantConfig {
@@ -304,6 +313,7 @@ impl Default for PlantConfig {
             force_noise_rms_n: r.force_noise_rms_n,
             solver: r.solver,
             effects: r.effects,
+            nuisance: r.nuisance,
         }
     }
 }
@@ -328,6 +338,7 @@ impl PlantConfig {
             solver: self.solver,
             attachment,
             effects: self.effects.clone(),
+            nuisance: self.nuisance,
             ..RigConfig::default()
         }
     }
@@ -577,6 +588,9 @@ impl Protocol {
         }
         self.check_plant(&mut c);
         self.subjects.check(&mut c);
+        if let Some(n) = &self.nuisance {
+            n.check(&mut c);
+        }
         let e = &self.estimate;
         c.positive("estimate.t_est_s", e.t_est_s);
         c.positive("estimate.savgol_cutoff_hz", e.savgol_cutoff_hz);

@@ -29,6 +29,8 @@ pub enum Stream {
     Arm = 2,
     /// The trial's own draws (position-perturbation directions).
     Schedule = 3,
+    /// The trial's nuisances (`super::nuisance`).
+    Nuisance = 4,
 }
 
 /// Seed of `stream` in trial `trial` (0-based) of subject `subject` (1-based).

@@ -413,12 +413,17 @@ struct Done {
 }
 
 fn run_trial(
-    protocol: &Protocol,
+    recorded: &Protocol,
     subject: &VirtualSubject,
     session_seed: u64,
     plan: &TrialPlan,
     clock: Option<&mut WallClock>,
 ) -> Result<Done, RehearseError> {
+    // The trial runs with its nuisances (if the protocol has any); its manifest entry
+    // keeps the protocol's task, as a lab's rig logs its targets.
+    let (protocol, subject) =
+        crate::protocol::nuisance::realise(recorded, subject, session_seed, plan.index);
+    let (protocol, subject) = (&protocol, &subject);
     let rate = f64::from(protocol.recording.rate_hz);
     let div = TICK_HZ / u64::from(protocol.recording.rate_hz);
     let (sim, timing) = match clock {
@@ -480,7 +485,7 @@ fn run_trial(
             }
         })
         .collect();
-    let meta = trial_meta(protocol, plan, onset_s);
+    let meta = trial_meta(recorded, plan, onset_s);
     let keep = onset_s.is_some() || !sim.push_onsets.is_empty();
     let result = TrialResult {
         id: plan.index + 1,
