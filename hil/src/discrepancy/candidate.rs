@@ -18,13 +18,24 @@
 //!
 //! The target of every fit is `u + F` (the force the model must account for) and the
 //! regressors are the cart accelerations (whose coefficients are the unknown masses)
-//! plus each candidate's own terms. Rows of both axes are stacked, so parameters that
+//! plus each candidate's own terms.
+//!
+//! What every real rig has is part of the nominal balance, never a candidate: each
+//! axis's motor force constant may be off by a few percent (a column `u` per axis whose
+//! coefficient `γ` makes the motor force `(1 + γ) u`; equally a sensor gain, the balance
+//! sees only their ratio), and the force sensor reads with an offset (an imperfect tare
+//! and its slow drift), fitted as a free constant per axis and trial and eliminated
+//! from each trial's Gram ([`Gram::absorb`]). Over a 3–4 s trial a drift of a tenth of a
+//! newton per session is constant to a few millinewtons; a rig that tares between
+//! trials is covered alike. Candidates whose law is constant on a trial (a Coulomb
+//! friction on a one-signed reach) are then judged on what differs from a constant:
+//! the still phases, the reversals and the velocity dependence. Rows of both axes are stacked, so parameters that
 //! the catalog shares between the axes (friction, ripple, delay, rotation) are fitted
 //! once. The normaliser of the NRMSE is the motor command itself: the error is the
 //! error of predicting the force the motor had to make.
 
 use super::error::DiscrepancyError;
-use super::gram::Gram;
+use super::gram::{Gram, Intercepts};
 use super::signals::BalanceSignals;
 
 /// A candidate plant effect: a family of linear least-squares problems, one per
@@ -41,7 +52,8 @@ pub trait Candidate: Designed + Sync + Send {
     fn settings(&self) -> usize;
     /// The nonlinear parameter's name (with unit) and its value at setting `s`.
     fn setting(&self, s: usize) -> (&'static str, f64);
-    /// Regressors: the two masses first, then the candidate's own.
+    /// Regressors: the two masses first, then the candidate's own (the nominal
+    /// balance's [`NUISANCE_COLUMNS`] follow them in every fit).
     fn columns(&self) -> usize;
     /// One trial's Gram for every setting.
     ///
@@ -76,28 +88,42 @@ pub trait Candidate: Designed + Sync + Send {
     }
 }
 
-/// `y − x·β` on the rows of both axes, with `x = [a·[axis = x], a·[axis = y], extra…]`.
+/// Columns of the nominal balance's nuisances that every design carries after the
+/// candidate's own: the motor command per axis (the force constant's error). The
+/// per-trial offsets are eliminated, not carried.
+pub const NUISANCE_COLUMNS: usize = 2;
+
+/// `y − x·β` on the rows of both axes, with `x = [a·[axis = x], a·[axis = y], extra…,
+/// u·[axis = x], u·[axis = y]]`, less its mean on each axis (the trial's sensor offsets
+/// at their least-squares values).
 pub fn residual_rows(
     sig: &BalanceSignals,
     targets: &[Vec<f64>; 2],
+    gains: &[Vec<f64>; 2],
     beta: &[f64],
     mut extra: impl FnMut(usize, usize, &mut [f64]),
 ) -> [Vec<f64>; 2] {
-    let mut x = vec![0.0; beta.len()];
+    let p = beta.len();
+    let mut x = vec![0.0; p];
     [0, 1].map(|axis| {
         let a = sig.at_rows(&sig.a[axis]);
-        a.iter()
+        let mut e: Vec<f64> = a
+            .iter()
             .zip(&targets[axis])
             .enumerate()
             .map(|(r, (acc, y))| {
                 x.iter_mut().for_each(|v| *v = 0.0);
                 x[axis] = *acc;
-                if x.len() > 2 {
-                    extra(axis, r, &mut x[2..]);
+                if p > 2 + NUISANCE_COLUMNS {
+                    extra(axis, r, &mut x[2..p - NUISANCE_COLUMNS]);
                 }
+                x[p - NUISANCE_COLUMNS + axis] = gains[axis][r];
                 y - x.iter().zip(beta).map(|(a, b)| a * b).sum::<f64>()
             })
-            .collect()
+            .collect();
+        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+        e.iter_mut().for_each(|v| *v -= mean);
+        e
     })
 }
 
@@ -113,25 +139,33 @@ pub fn nominal_target(sig: &BalanceSignals, axis: usize, latency_s: f64) -> (Vec
     if axis == 0 { (tx, nx) } else { (ty, ny) }
 }
 
-/// Adds the rows of both axes to `g`: regressors `[a·[axis = x], a·[axis = y], extra…]`
-/// where `extra(axis, row)` writes the candidate's own regressors.
+/// Adds the rows of one trial's both axes to `g` (which holds no other rows):
+/// regressors `[a·[axis = x], a·[axis = y], extra…, u·[axis = x], u·[axis = y]]` where
+/// `extra(axis, row)` writes the candidate's own regressors and `u` is `gains`, then
+/// eliminates a constant per axis (the trial's sensor offsets).
 pub fn push_rows(
     g: &mut Gram,
     sig: &BalanceSignals,
     targets: &[Vec<f64>; 2],
     norms: &[Vec<f64>; 2],
+    gains: &[Vec<f64>; 2],
     mut extra: impl FnMut(usize, usize, &mut [f64]),
 ) {
-    let mut x = vec![0.0; g.p];
+    let p = g.p;
+    let mut x = vec![0.0; p];
+    let mut ic = Intercepts::new(2, p);
     for axis in 0..2 {
         let a = sig.at_rows(&sig.a[axis]);
         for (r, ((acc, y), n)) in a.iter().zip(&targets[axis]).zip(&norms[axis]).enumerate() {
             x.iter_mut().for_each(|v| *v = 0.0);
             x[axis] = *acc;
-            extra(axis, r, &mut x[2..]);
+            extra(axis, r, &mut x[2..p - NUISANCE_COLUMNS]);
+            x[p - NUISANCE_COLUMNS + axis] = gains[axis][r];
             g.push(&x, *y, *n);
+            ic.push(axis, &x, *y);
         }
     }
+    g.absorb(&ic);
 }
 
 /// One setting of a candidate as a linear least-squares problem on the evaluated rows
@@ -148,6 +182,8 @@ pub struct Design {
     pub norm: [Vec<f64>; 2],
     /// The candidate's own regressors: `own[axis][column][row]`.
     pub own: [Vec<Vec<f64>>; 2],
+    /// The command as it enters the target, per axis: the force constant's column.
+    pub gain: [Vec<f64>; 2],
 }
 
 impl Design {
@@ -180,6 +216,7 @@ impl Design {
             target,
             norm: [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])],
             own: [Vec::new(), Vec::new()],
+            gain: u,
         }
     }
 
@@ -190,7 +227,7 @@ impl Design {
     }
 
     fn columns(&self) -> usize {
-        2 + self.own[0].len()
+        2 + self.own[0].len() + NUISANCE_COLUMNS
     }
 
     fn own_row(&self, axis: usize, r: usize, x: &mut [f64]) {
@@ -202,7 +239,7 @@ impl Design {
     /// The Gram of the rows of both axes.
     pub fn gram(&self, sig: &BalanceSignals) -> Gram {
         let mut g = Gram::new(self.columns());
-        push_rows(&mut g, sig, &self.target, &self.norm, |axis, r, x| {
+        push_rows(&mut g, sig, &self.target, &self.norm, &self.gain, |axis, r, x| {
             self.own_row(axis, r, x);
         });
         g
@@ -210,7 +247,7 @@ impl Design {
 
     /// The residual (target minus fit, N) with coefficients `beta`.
     pub fn residual(&self, sig: &BalanceSignals, beta: &[f64]) -> [Vec<f64>; 2] {
-        residual_rows(sig, &self.target, beta, |axis, r, x| {
+        residual_rows(sig, &self.target, &self.gain, beta, |axis, r, x| {
             self.own_row(axis, r, x);
         })
     }
@@ -277,6 +314,7 @@ impl Candidate for Baseline {
         masses(beta)
             .into_iter()
             .chain([("latency_ms".to_string(), latency_s * 1e3)])
+            .chain(force_gains(beta))
             .collect()
     }
     fn effect_force(
@@ -289,6 +327,22 @@ impl Candidate for Baseline {
     ) -> Option<f64> {
         Some(0.0)
     }
+}
+
+/// The fitted ratio of motor force to command per axis, `1 + γ` (the last
+/// [`NUISANCE_COLUMNS`] coefficients of any fit).
+#[must_use]
+pub fn force_gains(beta: &[f64]) -> Vec<(String, f64)> {
+    let n = beta.len();
+    let g = |axis: usize| {
+        (n >= 2 + NUISANCE_COLUMNS)
+            .then(|| 1.0 + beta[n - NUISANCE_COLUMNS + axis])
+            .unwrap_or(f64::NAN)
+    };
+    vec![
+        ("motor_force_gain_x".to_string(), g(0)),
+        ("motor_force_gain_y".to_string(), g(1)),
+    ]
 }
 
 /// The fitted masses as named parameters: x carries both carts, y the upper cart.

@@ -35,6 +35,7 @@ use serde::Serialize;
 
 use super::candidate::{Baseline, Candidate};
 use super::crossval::{CvFit, Folds, cross_validate};
+use super::decide::{MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial};
 use super::delay::ActuationDelay;
 use super::error::DiscrepancyError;
 use super::friction::RailFriction;
@@ -96,9 +97,16 @@ pub struct Ranked {
     pub fold_gains: Vec<f64>,
     /// One-sided t statistic of the fold gains.
     pub t_statistic: f64,
-    /// Beyond chance, at least the material floor, and physical (a positive mass or
-    /// reflex gain).
+    /// Beyond chance, at least the material floor on the gain, and passing every check
+    /// of [`super::decide`] (nothing in [`Self::rejected`]).
     pub significant: bool,
+    /// The checks of [`super::decide`] the candidate failed, each with its reason
+    /// (immaterial parameters, a parameter at the edge of its range, evidence that does
+    /// not follow the law, an unphysical sign).
+    pub rejected: Vec<String>,
+    /// For state-dependent effects (friction, ripple): the share of the binned partial
+    /// residual's variance the fitted law explains ([`super::decide::evidence_r2`]).
+    pub evidence_r2: Option<f64>,
     /// Parameters fitted on all trials (units in the names).
     pub parameters: BTreeMap<String, f64>,
     /// Jackknife standard error of each parameter over the folds.
@@ -135,6 +143,25 @@ pub struct NotJudged {
     pub reason: String,
 }
 
+/// One named cause.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Cause {
+    /// Catalog name.
+    pub name: String,
+    /// The balance it was judged on (`cart` or `hand`).
+    pub balance: String,
+    /// Held-out gain against that balance's baseline.
+    pub gain: f64,
+    /// Parameters fitted on all trials (units in the names). `angle_deg` of a sensor
+    /// rotation is how far the reading is turned from the true force, counter-clockwise
+    /// positive: `reading = R(angle) · F`, so the diagnosis applies `R(−angle)` to the
+    /// reading (the world's `SensorEffect::rotation_deg` has the same sign; a sensor
+    /// frame yawed by `−angle` reads so).
+    pub parameters: BTreeMap<String, f64>,
+    /// Their jackknife standard errors over the folds.
+    pub parameter_se: BTreeMap<String, f64>,
+}
+
 /// The outcome of [`diagnose`], as `rigtwin diagnose --json` prints it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnosis {
@@ -148,8 +175,12 @@ pub struct Diagnosis {
     pub rate_hz: f64,
     /// Cross-validation folds.
     pub folds: usize,
-    /// Catalog name of the cause, or `none`.
+    /// Catalog name of the strongest cause (the first of [`Self::causes`]), or `none`.
     pub cause: String,
+    /// Every named cause, strongest held-out gain first: the best candidate of each
+    /// balance that passes every test (the cart balance and the hand balance see
+    /// different effects, so one of each can be named at once).
+    pub causes: Vec<Cause>,
     /// The cause's parameters (units in the names); empty for `none`.
     pub parameters: BTreeMap<String, f64>,
     /// Their jackknife standard errors over the folds.
@@ -308,6 +339,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         rate_hz: rate,
         folds: 0,
         cause: "none".to_string(),
+        causes: Vec::new(),
         parameters: BTreeMap::new(),
         parameter_se: BTreeMap::new(),
         baseline_nrmse: None,
@@ -402,12 +434,35 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     fold_gains,
                     t_statistic: t,
                     significant: t > plant_t && gain >= opts.min_gain,
+                    rejected: Vec::new(),
+                    evidence_r2: None,
                     parameters,
                     parameter_se,
                 };
                 (r, cf)
             })
             .collect();
+        // The physical checks, for the candidates that passed the statistical ones
+        // (the evidence check re-forms every trial's residual).
+        let scale = SessionScale::of(&signals);
+        for (r, cf) in &mut plant_ranked {
+            let c = cf.candidate.as_ref();
+            let s = cf.fit.setting;
+            r.rejected = immaterial(&r.name, &r.parameters, &scale, latency_s * 1e3);
+            r.rejected
+                .extend(at_edge(&r.name, c.setting(s), s, c.settings()));
+            if r.significant {
+                r.evidence_r2 = evidence_r2(c, s, &cf.fit.beta, &signals, latency_s)?;
+                if let Some(r2) = r.evidence_r2.filter(|r2| *r2 < MIN_EVIDENCE_R2) {
+                    r.rejected.push(format!(
+                        "its evidence does not follow its law: the fitted law explains {:.0} % of the binned partial residual (at least {:.0} % needed)",
+                        100.0 * r2,
+                        100.0 * MIN_EVIDENCE_R2
+                    ));
+                }
+            }
+            r.significant &= r.rejected.is_empty();
+        }
         plant_ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
         d.baseline_nrmse = Some(base_nrmse);
         baseline_fit = Some(baseline);
@@ -429,6 +484,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let mut hand_ranked: Vec<Ranked> = Vec::new();
     let mut hand_df = None;
     let mut hand_t = None;
+    let hand_scale = SessionScale::of(&signals);
     let hand = match hand {
         Ok(h) => {
             let base_nrmse = h.baseline.nrmse();
@@ -478,6 +534,17 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     c.parameters(fit.setting, &fit.beta, h.fb_delay_s),
                     &fold_params,
                 );
+                let mut rejected = Vec::new();
+                if !c.physical(fit.setting, &fit.beta) {
+                    rejected.push("unphysical: a negative mass or reflex gain".to_string());
+                }
+                rejected.extend(immaterial(c.name(), &parameters, &hand_scale, 0.0));
+                rejected.extend(at_edge(
+                    c.name(),
+                    c.setting(fit.setting),
+                    fit.setting,
+                    c.settings(),
+                ));
                 hand_ranked.push(Ranked {
                     name: c.name().to_string(),
                     balance: "hand".into(),
@@ -485,9 +552,9 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     extended_nrmse: nrmse,
                     fold_gains,
                     t_statistic: t,
-                    significant: t > t_crit
-                        && gain >= opts.min_gain
-                        && c.physical(fit.setting, &fit.beta),
+                    significant: t > t_crit && gain >= opts.min_gain && rejected.is_empty(),
+                    rejected,
+                    evidence_r2: None,
                     parameters,
                     parameter_se,
                 });
@@ -514,12 +581,27 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
     d.extended_nrmse = d.baseline_nrmse;
     d.gain = d.baseline_nrmse.map(|_| 0.0);
-    let cause = plant_ranked
+    // The best passing candidate of each balance, strongest first.
+    let mut named: Vec<Ranked> = plant_ranked
         .iter()
         .map(|(r, _)| r)
         .find(|r| r.significant)
-        .or_else(|| hand_ranked.iter().find(|r| r.significant))
-        .cloned();
+        .into_iter()
+        .chain(hand_ranked.iter().find(|r| r.significant))
+        .cloned()
+        .collect();
+    named.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+    d.causes = named
+        .iter()
+        .map(|r| Cause {
+            name: r.name.clone(),
+            balance: r.balance.clone(),
+            gain: r.gain,
+            parameters: r.parameters.clone(),
+            parameter_se: r.parameter_se.clone(),
+        })
+        .collect();
+    let cause = named.first().cloned();
     if let Some(r) = &cause {
         d.cause = r.name.clone();
         d.parameters = r.parameters.clone();

@@ -81,6 +81,28 @@ impl Gram {
         self.n -= other.n.min(self.n);
     }
 
+    /// Removes what per-group intercepts would explain, given each group's sums
+    /// ([`Intercepts`]): the Schur complement of the intercept columns, so that a fit
+    /// on the result equals a fit with one free constant per group (Frisch–Waugh), and
+    /// Grams so reduced still add over trials.
+    pub fn absorb(&mut self, ic: &Intercepts) {
+        let p = self.p;
+        for grp in &ic.groups {
+            if grp.n == 0 {
+                continue;
+            }
+            let n = grp.n as f64;
+            for i in 0..p {
+                for j in 0..p {
+                    self.xtx[i * p + j] -= grp.sx[i] * grp.sx[j] / n;
+                }
+                self.xty[i] -= grp.sx[i] * grp.sy / n;
+            }
+            self.yty -= grp.sy * grp.sy / n;
+        }
+        self.yty = self.yty.max(0.0);
+    }
+
     /// Sum of several Grams of the same size.
     #[must_use]
     pub fn sum<'a>(p: usize, grams: impl IntoIterator<Item = &'a Gram>) -> Gram {
@@ -138,5 +160,86 @@ impl Gram {
         let inv = a.try_inverse()?;
         let s2 = self.sse(beta) / (self.n - p) as f64;
         Some((0..p * p).map(|k| inv[(k / p, k % p)] * s2).collect())
+    }
+}
+
+/// Column and target sums per group of rows (one group per axis of a trial): what
+/// [`Gram::absorb`] needs to fit a constant per group without carrying its column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Intercepts {
+    groups: Vec<Group>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Group {
+    sx: Vec<f64>,
+    sy: f64,
+    n: usize,
+}
+
+impl Intercepts {
+    /// `groups` groups of rows with `p` regressors.
+    #[must_use]
+    pub fn new(groups: usize, p: usize) -> Intercepts {
+        Intercepts {
+            groups: vec![
+                Group {
+                    sx: vec![0.0; p],
+                    sy: 0.0,
+                    n: 0,
+                };
+                groups
+            ],
+        }
+    }
+
+    /// Adds one row of group `group`.
+    pub fn push(&mut self, group: usize, x: &[f64], y: f64) {
+        let g = &mut self.groups[group];
+        for (s, v) in g.sx.iter_mut().zip(x) {
+            *s += v;
+        }
+        g.sy += y;
+        g.n += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+
+    /// Absorbing one intercept per group gives the coefficients and the residual sum
+    /// of squares of the fit that carries the two constants as columns (to 1e-9
+    /// relative: the two are the same normal equations, eliminated in a different
+    /// order).
+    #[test]
+    fn absorbed_intercepts_equal_explicit_constants() {
+        let rows: Vec<(usize, [f64; 2], f64)> = (0..200)
+            .map(|i| {
+                let t = i as f64 * 0.01;
+                let g = i % 2;
+                let x = [t.sin(), (3.0 * t).cos() + 0.1 * t];
+                let y = 2.0 * x[0] - 0.5 * x[1] + [0.7, -1.3][g] + 0.01 * (7.0 * t).sin();
+                (g, x, y)
+            })
+            .collect();
+        let mut reduced = Gram::new(2);
+        let mut ic = Intercepts::new(2, 2);
+        let mut full = Gram::new(4);
+        for (g, x, y) in &rows {
+            reduced.push(x, *y, 1.0);
+            ic.push(*g, x, *y);
+            let c = [x[0], x[1], f64::from(*g == 0), f64::from(*g == 1)];
+            full.push(&c, *y, 1.0);
+        }
+        reduced.absorb(&ic);
+        let b = reduced.solve().unwrap();
+        let bf = full.solve().unwrap();
+        for k in 0..2 {
+            assert!((b[k] - bf[k]).abs() < 1e-9 * bf[k].abs(), "{b:?} vs {bf:?}");
+        }
+        let (se, sf) = (reduced.sse(&b), full.sse(&bf));
+        assert!((se - sf).abs() < 1e-9 * sf.max(1e-12) + 1e-12, "{se} vs {sf}");
     }
 }

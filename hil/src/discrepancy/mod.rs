@@ -11,6 +11,7 @@
 //! | `gram.rs` | least squares as sums of per-trial sufficient statistics |
 //! | `crossval.rs` | folds of whole trials; held-out error |
 //! | `stats.rs` | Student's t and the jackknife behind the chance threshold |
+//! | `decide.rs` | the physical checks before a cause is named: material, inside its range, its own evidence agreeing |
 //! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
 //! | `model.rs` | the extended model as TOML (`--write-model`) |
 //! | `plots.rs` | the PNG figures of `diagnosis.md` |
@@ -22,6 +23,7 @@
 mod bands;
 mod candidate;
 mod crossval;
+pub mod decide;
 mod delay;
 mod diagnose;
 mod error;
@@ -40,11 +42,14 @@ pub mod stats;
 mod subject_fit;
 
 pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
-pub use candidate::{Baseline, Candidate, masses, nominal_target, push_rows, residual_rows};
+pub use candidate::{
+    Baseline, Candidate, NUISANCE_COLUMNS, force_gains, masses, nominal_target, push_rows,
+    residual_rows,
+};
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
 pub use diagnose::{
-    Analysis, CandidateFit, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE, Ranked,
+    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE, Ranked,
     Threshold, diagnose,
 };
 pub use error::DiscrepancyError;

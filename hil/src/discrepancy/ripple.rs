@@ -13,9 +13,9 @@
 
 use std::f64::consts::TAU;
 
-use super::candidate::{Candidate, Design, Designed};
+use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS};
 use super::error::DiscrepancyError;
-use super::gram::Gram;
+use super::gram::{Gram, Intercepts};
 use super::signals::BalanceSignals;
 
 /// Shortest pitch searched, m.
@@ -97,8 +97,10 @@ impl Candidate for ForceRipple {
     /// Equal to `Designed::design`'s Gram at every setting (a unit test checks it).
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
         let nominal = Design::nominal(sig, latency_s);
-        let mut grams = vec![Gram::new(4); self.n];
-        let mut x = [0.0; 4];
+        const P: usize = 4 + NUISANCE_COLUMNS;
+        let mut grams = vec![Gram::new(P); self.n];
+        let mut offsets = vec![Intercepts::new(2, P); self.n];
+        let mut x = [0.0; P];
         for axis in 0..2 {
             let a = sig.at_rows(&sig.a[axis]);
             let q = sig.at_rows(&sig.q[axis]);
@@ -108,13 +110,20 @@ impl Candidate for ForceRipple {
                 let (mut s, mut c) = (s0, c0);
                 x[0] = if axis == 0 { a[r] } else { 0.0 };
                 x[1] = if axis == 1 { a[r] } else { 0.0 };
-                for g in &mut grams {
+                x[4] = if axis == 0 { nominal.gain[0][r] } else { 0.0 };
+                x[5] = if axis == 1 { nominal.gain[1][r] } else { 0.0 };
+                let y = nominal.target[axis][r];
+                for (g, ic) in grams.iter_mut().zip(&mut offsets) {
                     x[2] = s;
                     x[3] = c;
-                    g.push(&x, nominal.target[axis][r], nominal.norm[axis][r]);
+                    g.push(&x, y, nominal.norm[axis][r]);
+                    ic.push(axis, &x, y);
                     (s, c) = (s * cd + c * sd, c * cd - s * sd);
                 }
             }
+        }
+        for (g, ic) in grams.iter_mut().zip(&offsets) {
+            g.absorb(ic);
         }
         Ok(grams)
     }

@@ -12,7 +12,7 @@
 //! sensor, an effect outside the catalog). Each angle's Gram is a quadratic form of one
 //! 5 × 5 Gram of `[a_x, a_y, u, F_own, F_other]` per trial.
 
-use super::candidate::{Candidate, Design, Designed, push_rows};
+use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, push_rows};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -75,8 +75,10 @@ impl Candidate for SensorRotation {
         2
     }
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        // Raw Gram of [a_x·1x, a_y·1y, u, F_own, F_other] with target 0, built with
-        // the generic row pusher by treating all five as regressors.
+        // Raw Gram of [a_x·1x, a_y·1y, u, F_own, F_other, u·1x, u·1y] with target 0,
+        // built (offsets eliminated) with the generic row pusher by treating all seven
+        // as regressors; each angle's Gram is a quadratic form of it: regressors the
+        // masses and the force gains, target `u + cos θ F_own + sin θ F_other`.
         let u = [
             sig.delayed_command(0, latency_s),
             sig.delayed_command(1, latency_s),
@@ -84,28 +86,32 @@ impl Candidate for SensorRotation {
         let f = [sig.at_rows(&sig.f[0]), sig.at_rows(&sig.f[1])];
         let norms = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
         let zeros = [vec![0.0; sig.rows.len()], vec![0.0; sig.rows.len()]];
-        let mut raw = Gram::new(5);
-        push_rows(&mut raw, sig, &zeros, &norms, |axis, r, x| {
+        const RAW: usize = 5 + NUISANCE_COLUMNS;
+        let mut raw = Gram::new(RAW);
+        push_rows(&mut raw, sig, &zeros, &norms, &u, |axis, r, x| {
             x[0] = u[axis][r];
             x[1] = f[axis][r];
             // x rows: +F_y; y rows: −F_x.
             x[2] = if axis == 0 { f[1][r] } else { -f[0][r] };
         });
-        let at = |i: usize, j: usize| raw.xtx[i * 5 + j];
+        let at = |i: usize, j: usize| raw.xtx[i * RAW + j];
+        let regressors = [0, 1, 5, 6];
+        let p = regressors.len();
         Ok((0..self.settings())
             .map(|s| {
                 let th = self.angle_deg(s).to_radians();
                 let w = [1.0, th.cos(), th.sin()];
-                let mut g = Gram::new(2);
-                for i in 0..2 {
-                    for j in 0..2 {
-                        g.xtx[i * 2 + j] = at(i, j);
+                let mut g = Gram::new(p);
+                for (i, &ri) in regressors.iter().enumerate() {
+                    for (j, &rj) in regressors.iter().enumerate() {
+                        g.xtx[i * p + j] = at(ri, rj);
                     }
-                    g.xty[i] = (0..3).map(|k| w[k] * at(i, 2 + k)).sum();
+                    g.xty[i] = (0..3).map(|k| w[k] * at(ri, 2 + k)).sum();
                 }
                 g.yty = (0..3)
                     .map(|k| (0..3).map(|l| w[k] * w[l] * at(2 + k, 2 + l)).sum::<f64>())
-                    .sum();
+                    .sum::<f64>()
+                    .max(0.0);
                 g.norm_sq = raw.norm_sq;
                 g.n = raw.n;
                 g

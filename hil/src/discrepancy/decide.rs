@@ -1,0 +1,255 @@
+//! The checks a candidate must pass besides its held-out gain before it is named: its
+//! parameters are material in physical units, they are not at the edge of their search
+//! range, and its own evidence agrees with its law.
+//!
+//! **Material.** Every rule compares the largest force the fitted effect makes over the
+//! session with [`FORCE_RESOLUTION_N`], or states the physical floor the effect has:
+//!
+//! | effect | material when |
+//! |---|---|
+//! | `rail-friction` | `|Fc| + |b| v_max ≥ 0.25 N` at the session's largest cart speed, with `Fc, b ≥ 0` |
+//! | `force-ripple` | amplitude `≥ 0.25 N` |
+//! | `sensor-rotation` | `|sin θ| F_max ≥ 0.25 N` at the session's largest sensor force, and `|θ| ≥ 0.5°` |
+//! | `actuation-delay` | at least one 4 kHz tick (0.25 ms) beyond the nominal latency |
+//! | `handle-mass` | `m a_max ≥ 0.25 N` at the session's largest cart acceleration |
+//! | `grip-compliance` | the grip stretches `≥ 0.25 mm` under the session's largest sensor force |
+//! | `stretch-reflex` | gain `≥ 25 N s/m` (a tenth of the muscles' own damping, 100–300 N s/m) |
+//!
+//! **Inside its range.** A parameter found at the first or last point of its grid (a
+//! ripple pitch at 5 or 100 mm, an angle at ±45°, a reflex delay at 10 or 50 ms, a grip
+//! at 0.5 or 50 kN/m, a friction knee at its softest 10 mm/s) says the law was pushed to
+//! fit something else; it is not named. A friction knee at the sharpest setting is the
+//! sign-function limit of the law, not an edge.
+//!
+//! **Its own evidence.** For the effects that are a function of the carts' state
+//! (friction of the velocity, ripple of the position), the *partial residual* (the
+//! candidate's held-out-fitted residual plus the effect's own fitted force) is averaged
+//! in bins of the effect's coordinate and compared with the fitted law averaged in the
+//! same bins: the law must explain at least [`MIN_EVIDENCE_R2`] of the binned partial
+//! residual's variance across bins. A 0.18 N "ripple" of 75 mm pitch fitted to a slow
+//! trend fails it (the bins are flat where the sine swings).
+
+use super::candidate::Candidate;
+use super::error::DiscrepancyError;
+use super::signals::BalanceSignals;
+
+/// The force a lab's rig resolves over a session, N: the realistic force-sensor noise
+/// is 0.05–0.15 N RMS per sample and the tare error up to 0.3 N
+/// (`protocol::nuisance::NuisanceConfig::REALISTIC`, the shared realistic sessions);
+/// an effect whose force stays below a quarter newton everywhere changes no command or
+/// trajectory a lab would act on.
+pub const FORCE_RESOLUTION_N: f64 = 0.25;
+
+/// Share of the binned partial residual's variance the law must explain.
+pub const MIN_EVIDENCE_R2: f64 = 0.5;
+
+/// Bins of the evidence check.
+const BINS: usize = 16;
+
+/// What bounds the session's forces and motions, for the materiality rules.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SessionScale {
+    /// Largest cart speed, m/s.
+    pub v_max: f64,
+    /// Largest cart acceleration, m/s².
+    pub a_max: f64,
+    /// Largest sensor force, N.
+    pub f_max: f64,
+}
+
+impl SessionScale {
+    /// The largest magnitudes over the evaluated rows of every trial and axis (of the
+    /// smoothed signals the balance uses, so no single sample's noise sets them).
+    #[must_use]
+    pub fn of(signals: &[BalanceSignals]) -> SessionScale {
+        let max = |pick: &dyn Fn(&BalanceSignals, usize) -> &Vec<f64>| {
+            signals
+                .iter()
+                .flat_map(|s| (0..2).flat_map(move |a| s.at_rows(pick(s, a))))
+                .map(f64::abs)
+                .fold(0.0, f64::max)
+        };
+        SessionScale {
+            v_max: max(&|s, a| &s.v[a]),
+            a_max: max(&|s, a| &s.a[a]),
+            f_max: max(&|s, a| &s.f[a]),
+        }
+    }
+}
+
+fn p(params: &std::collections::BTreeMap<String, f64>, k: &str) -> f64 {
+    params.get(k).copied().unwrap_or(f64::NAN)
+}
+
+/// Why the fitted parameters of `name` are not a finding (empty when they are), by the
+/// module's table; `latency_ms` is the nominal latency.
+#[must_use]
+pub fn immaterial(
+    name: &str,
+    params: &std::collections::BTreeMap<String, f64>,
+    scale: &SessionScale,
+    latency_ms: f64,
+) -> Vec<String> {
+    let r = FORCE_RESOLUTION_N;
+    let mut why = Vec::new();
+    match name {
+        "rail-friction" => {
+            let (fc, b) = (p(params, "coulomb_n"), p(params, "viscous_n_s_per_m"));
+            if fc < -0.05 || b < -0.5 {
+                why.push(format!(
+                    "friction must resist motion: coulomb {fc:.3} N, viscous {b:.3} N s/m"
+                ));
+            }
+            let peak = fc.abs() + b.abs() * scale.v_max;
+            if peak < r {
+                why.push(format!(
+                    "immaterial: at most {peak:.3} N at {:.3} m/s, below the rig's {r} N",
+                    scale.v_max
+                ));
+            }
+        }
+        "force-ripple" => {
+            let a = p(params, "amplitude_n");
+            if a < r {
+                why.push(format!("immaterial: amplitude {a:.3} N, below the rig's {r} N"));
+            }
+        }
+        "sensor-rotation" => {
+            let th = p(params, "angle_deg");
+            let f = th.to_radians().sin().abs() * scale.f_max;
+            if th.abs() < 0.5 || f < r {
+                why.push(format!(
+                    "immaterial: {th:.2}° turns at most {f:.3} N of the session's {:.1} N into the other axis",
+                    scale.f_max
+                ));
+            }
+        }
+        "actuation-delay" => {
+            let d = p(params, "delay_ms");
+            if d - latency_ms < 0.25 - 1e-9 {
+                why.push(format!(
+                    "immaterial: {d:.3} ms is within one 4 kHz tick of the nominal latency {latency_ms:.3} ms"
+                ));
+            }
+        }
+        "handle-mass" => {
+            let m = p(params, "extra_mass_kg");
+            let f = m * scale.a_max;
+            if f < r {
+                why.push(format!(
+                    "immaterial: {m:.3} kg makes at most {f:.3} N at {:.2} m/s²",
+                    scale.a_max
+                ));
+            }
+        }
+        "grip-compliance" => {
+            let k = p(params, "stiffness_n_per_m");
+            let stretch = scale.f_max / k;
+            if stretch < 0.25e-3 {
+                why.push(format!(
+                    "immaterial: {k:.0} N/m stretches {:.3} mm under the session's {:.1} N",
+                    stretch * 1e3,
+                    scale.f_max
+                ));
+            }
+        }
+        "stretch-reflex" => {
+            let g = p(params, "gain");
+            if g < 25.0 {
+                why.push(format!("immaterial: reflex gain {g:.1} N s/m, below 25 N s/m"));
+            }
+        }
+        _ => {}
+    }
+    why
+}
+
+/// Why setting `s` of a candidate with `settings` settings is at the edge of its search
+/// range (empty when it is not).
+#[must_use]
+pub fn at_edge(name: &str, setting: (&str, f64), s: usize, settings: usize) -> Vec<String> {
+    if settings < 2 {
+        return Vec::new();
+    }
+    let first = s == 0 && name != "rail-friction" && name != "actuation-delay";
+    let last = s + 1 == settings;
+    if first || last {
+        vec![format!(
+            "at the edge of its search range: {} {:.4} is the {} setting",
+            setting.0,
+            setting.1,
+            if first { "first" } else { "last" }
+        )]
+    } else {
+        Vec::new()
+    }
+}
+
+/// `R²` of the fitted law against the binned partial residual, for a candidate whose
+/// effect is a function of the carts' state (`None` for the others, or with too few
+/// filled bins): friction against velocity, ripple against position, both axes pooled.
+///
+/// # Errors
+/// A signal-processing error while forming the residual.
+pub fn evidence_r2(
+    c: &dyn Candidate,
+    s: usize,
+    beta: &[f64],
+    signals: &[BalanceSignals],
+    latency_s: f64,
+) -> Result<Option<f64>, DiscrepancyError> {
+    let by_velocity = match c.name() {
+        "rail-friction" => true,
+        "force-ripple" => false,
+        _ => return Ok(None),
+    };
+    // Coordinate, partial residual and law at every evaluated row.
+    let mut pts: Vec<(f64, f64, f64)> = Vec::new();
+    for sig in signals {
+        let res = c.residual(sig, s, beta, latency_s)?;
+        for (axis, e) in res.iter().enumerate() {
+            let q = sig.at_rows(&sig.q[axis]);
+            let v = sig.at_rows(&sig.v[axis]);
+            for r in 0..e.len() {
+                let Some(f) = c.effect_force(s, beta, axis, q[r], v[r]) else {
+                    return Ok(None);
+                };
+                // The fit carries the effect as `−f` on the target side.
+                let law = -f;
+                let x = if by_velocity { v[r] } else { q[r] };
+                pts.push((x, e[r] + law, law));
+            }
+        }
+    }
+    if pts.is_empty() {
+        return Ok(None);
+    }
+    let lo = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let hi = pts.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    if !(hi > lo) {
+        return Ok(None);
+    }
+    let mut bins = vec![(0.0, 0.0, 0usize); BINS];
+    for (x, partial, law) in &pts {
+        let k = (((x - lo) / (hi - lo)) * BINS as f64).floor() as usize;
+        let b = &mut bins[k.min(BINS - 1)];
+        b.0 += partial;
+        b.1 += law;
+        b.2 += 1;
+    }
+    // Bins with at least 1 % of the rows, weighted by their counts.
+    let min_n = pts.len() / 100;
+    let filled: Vec<(f64, f64, f64)> = bins
+        .iter()
+        .filter(|b| b.2 > min_n.max(10))
+        .map(|b| (b.0 / b.2 as f64, b.1 / b.2 as f64, b.2 as f64))
+        .collect();
+    if filled.len() < 4 {
+        return Ok(None);
+    }
+    let w: f64 = filled.iter().map(|b| b.2).sum();
+    let mean = filled.iter().map(|b| b.0 * b.2).sum::<f64>() / w;
+    let ss_tot: f64 = filled.iter().map(|b| b.2 * (b.0 - mean).powi(2)).sum();
+    let ss_res: f64 = filled.iter().map(|b| b.2 * (b.0 - b.1).powi(2)).sum();
+    Ok((ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot))
+}
