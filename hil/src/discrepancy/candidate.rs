@@ -239,9 +239,16 @@ impl Design {
     /// The Gram of the rows of both axes.
     pub fn gram(&self, sig: &BalanceSignals) -> Gram {
         let mut g = Gram::new(self.columns());
-        push_rows(&mut g, sig, &self.target, &self.norm, &self.gain, |axis, r, x| {
-            self.own_row(axis, r, x);
-        });
+        push_rows(
+            &mut g,
+            sig,
+            &self.target,
+            &self.norm,
+            &self.gain,
+            |axis, r, x| {
+                self.own_row(axis, r, x);
+            },
+        );
         g
     }
 

@@ -111,7 +111,9 @@ pub fn immaterial(
         "force-ripple" => {
             let a = p(params, "amplitude_n");
             if a < r {
-                why.push(format!("immaterial: amplitude {a:.3} N, below the rig's {r} N"));
+                why.push(format!(
+                    "immaterial: amplitude {a:.3} N, below the rig's {r} N"
+                ));
             }
         }
         "sensor-rotation" => {
@@ -156,7 +158,9 @@ pub fn immaterial(
         "stretch-reflex" => {
             let g = p(params, "gain");
             if g < 25.0 {
-                why.push(format!("immaterial: reflex gain {g:.1} N s/m, below 25 N s/m"));
+                why.push(format!(
+                    "immaterial: reflex gain {g:.1} N s/m, below 25 N s/m"
+                ));
             }
         }
         _ => {}

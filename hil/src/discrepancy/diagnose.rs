@@ -5,9 +5,12 @@
 //!
 //! The two balances see different effects: the human-side effects act above the force
 //! sensor and cannot change the cart balance; the plant-side ones (but sensor rotation)
-//! do not enter the hand balance. A significant plant-side effect is named first (it
-//! also spoils the sensor reading the hand balance rests on), else a significant
-//! human-side one, else `none`.
+//! do not enter the hand balance. So the best candidate of each balance that passes
+//! every test is named, both when both pass ([`Diagnosis::causes`], strongest held-out
+//! gain first; `cause` is the first, or `none`). Besides the statistics, a candidate
+//! must be physical and material, inside its search range and agree with its own
+//! binned evidence ([`super::decide`]); a candidate that fails is listed with the
+//! reason ([`Ranked::rejected`]).
 //!
 //! The chance threshold: each fold gives a held-out gain `gₖ = 1 − √(SSEₖ,ext / SSEₖ,base)`.
 //! Under "the candidate explains nothing" the folds' gains scatter around a value ≤ 0
@@ -634,15 +637,20 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             rule: format!(
                 "a candidate is named when the one-sided t of its fold gains (against its own balance's baseline) \
                  exceeds the critical t at alpha {} / {judged} candidates = {:.4} (cart balance: df {plant_df}, t {plant_t:.2}{}) \
-                 and its held-out gain is at least {:.0} %; a human-side fit must also be physical (positive mass, \
-                 positive reflex gain). The largest plant-side gain wins, else the largest human-side one",
+                 and its held-out gain is at least {:.0} %, and it passes the physical checks: physical signs, \
+                 parameters material in newtons (at least {} N of force over the session, or the table of \
+                 hil/src/discrepancy/decide.rs), not at the edge of their search range, and for friction and ripple \
+                 a fitted law that explains at least {:.0} % of its binned partial residual. The best passing \
+                 candidate of each balance is named, strongest first",
                 opts.alpha,
                 alpha_each,
                 match (hand_df, hand_t) {
                     (Some(df), Some(t)) => format!("; hand balance: df {df}, t {t:.2}"),
                     _ => String::new(),
                 },
-                opts.min_gain * 100.0
+                opts.min_gain * 100.0,
+                super::decide::FORCE_RESOLUTION_N,
+                100.0 * MIN_EVIDENCE_R2,
             ),
         });
     }

@@ -240,6 +240,9 @@ mod tests {
             assert!((b[k] - bf[k]).abs() < 1e-9 * bf[k].abs(), "{b:?} vs {bf:?}");
         }
         let (se, sf) = (reduced.sse(&b), full.sse(&bf));
-        assert!((se - sf).abs() < 1e-9 * sf.max(1e-12) + 1e-12, "{se} vs {sf}");
+        assert!(
+            (se - sf).abs() < 1e-9 * sf.max(1e-12) + 1e-12,
+            "{se} vs {sf}"
+        );
     }
 }

@@ -49,8 +49,8 @@ pub use candidate::{
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
 pub use diagnose::{
-    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE, Ranked,
-    Threshold, diagnose,
+    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE,
+    Ranked, Threshold, diagnose,
 };
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};

@@ -1,10 +1,11 @@
 //! The extended model that `diagnose --write-model` writes and `compare --model` and
-//! `rehearse --model` read: the effect named as the cause, in the world's own
+//! `rehearse --model` read: every effect named as a cause, in the world's own
 //! [`PlantEffects`] keys (so the same table configures `rigtwin_world::RigConfig::effects`;
 //! `handle_mass` and `grip_compliance` live there too) and, for `stretch-reflex`, the
 //! arm's own [`StretchReflex`] keys. [`ExtendedModel::apply_to`] puts both into a
 //! protocol.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use rigtwin_arm::params::StretchReflex;
@@ -24,8 +25,12 @@ use crate::protocol::Protocol;
 pub struct ExtendedModel {
     /// Session it was fitted to.
     pub fitted_to: String,
-    /// Catalog name of the cause, or `none`.
+    /// Catalog name of the strongest cause, or `none`.
     pub cause: String,
+    /// Every cause the model carries, strongest first (all of them are in `effects`
+    /// and `stretch_reflex`).
+    #[serde(default)]
+    pub causes: Vec<String>,
     /// Held-out gain of the model over the nominal balance.
     pub gain: f64,
     /// Fitted moving mass of the x axis (both carts), kg.
@@ -40,8 +45,81 @@ pub struct ExtendedModel {
     pub stretch_reflex: Option<StretchReflex>,
 }
 
-fn get(d: &Diagnosis, k: &str) -> Option<f64> {
-    d.parameters.get(k).copied()
+fn get(p: &BTreeMap<String, f64>, k: &str) -> Option<f64> {
+    p.get(k).copied()
+}
+
+/// Adds the effect `name` with its fitted `p` to the world's effects (or the arm's
+/// reflex); an unknown name adds nothing.
+fn add_effect(
+    effects: &mut PlantEffects,
+    stretch_reflex: &mut Option<StretchReflex>,
+    name: &str,
+    p: &BTreeMap<String, f64>,
+) {
+    match name {
+        "rail-friction" => {
+            if let (Some(c), Some(b), Some(vs)) = (
+                get(p, "coulomb_n"),
+                get(p, "viscous_n_s_per_m"),
+                get(p, "smooth_velocity_m_per_s"),
+            ) {
+                effects.rail_friction = Some(RailFriction {
+                    coulomb_n: c.max(0.0),
+                    viscous_n_s_per_m: b.max(0.0),
+                    smooth_velocity_m_per_s: vs,
+                });
+            }
+        }
+        "force-ripple" => {
+            if let (Some(a), Some(p)) = (get(p, "amplitude_n"), get(p, "pitch_m")) {
+                effects.force_ripple = Some(ForceRipple {
+                    amplitude_n: a,
+                    pitch_m: p,
+                });
+            }
+        }
+        "actuation-delay" => {
+            if let Some(ms) = get(p, "delay_ms") {
+                effects.actuation_delay = Some(ActuationDelay {
+                    delay_ms: ms.max(0.0),
+                });
+            }
+        }
+        "sensor-rotation" => {
+            if let Some(deg) = get(p, "angle_deg") {
+                effects.sensor = Some(SensorEffect {
+                    rotation_deg: deg,
+                    offset_n: [0.0; 2],
+                    lowpass_hz: 0.0,
+                });
+            }
+        }
+        "handle-mass" => {
+            if let Some(kg) = get(p, "extra_mass_kg") {
+                effects.handle_mass = Some(HandleMass {
+                    extra_mass_kg: kg.max(0.0),
+                });
+            }
+        }
+        "grip-compliance" => {
+            if let Some(k) = get(p, "stiffness_n_per_m") {
+                effects.grip_compliance = Some(GripCompliance {
+                    stiffness_n_per_m: k,
+                    damping_n_s_per_m: get(p, "damping_n_s_per_m").unwrap_or(0.0).max(0.0),
+                });
+            }
+        }
+        "stretch-reflex" => {
+            if let (Some(ms), Some(g)) = (get(p, "delay_ms"), get(p, "gain")) {
+                *stretch_reflex = Some(StretchReflex {
+                    delay_ms: ms.max(0.0),
+                    gain_n_s_per_m: g.max(0.0),
+                });
+            }
+        }
+        _ => {}
+    }
 }
 
 impl ExtendedModel {
@@ -51,73 +129,14 @@ impl ExtendedModel {
     pub fn from_diagnosis(d: &Diagnosis) -> ExtendedModel {
         let mut effects = PlantEffects::default();
         let mut stretch_reflex = None;
-        match d.cause.as_str() {
-            "rail-friction" => {
-                if let (Some(c), Some(b), Some(vs)) = (
-                    get(d, "coulomb_n"),
-                    get(d, "viscous_n_s_per_m"),
-                    get(d, "smooth_velocity_m_per_s"),
-                ) {
-                    effects.rail_friction = Some(RailFriction {
-                        coulomb_n: c.max(0.0),
-                        viscous_n_s_per_m: b.max(0.0),
-                        smooth_velocity_m_per_s: vs,
-                    });
-                }
-            }
-            "force-ripple" => {
-                if let (Some(a), Some(p)) = (get(d, "amplitude_n"), get(d, "pitch_m")) {
-                    effects.force_ripple = Some(ForceRipple {
-                        amplitude_n: a,
-                        pitch_m: p,
-                    });
-                }
-            }
-            "actuation-delay" => {
-                if let Some(ms) = get(d, "delay_ms") {
-                    effects.actuation_delay = Some(ActuationDelay {
-                        delay_ms: ms.max(0.0),
-                    });
-                }
-            }
-            "sensor-rotation" => {
-                if let Some(deg) = get(d, "angle_deg") {
-                    effects.sensor = Some(SensorEffect {
-                        rotation_deg: deg,
-                        offset_n: [0.0; 2],
-                        lowpass_hz: 0.0,
-                    });
-                }
-            }
-            "handle-mass" => {
-                if let Some(kg) = get(d, "extra_mass_kg") {
-                    effects.handle_mass = Some(HandleMass {
-                        extra_mass_kg: kg.max(0.0),
-                    });
-                }
-            }
-            "grip-compliance" => {
-                if let Some(k) = get(d, "stiffness_n_per_m") {
-                    effects.grip_compliance = Some(GripCompliance {
-                        stiffness_n_per_m: k,
-                        damping_n_s_per_m: get(d, "damping_n_s_per_m").unwrap_or(0.0).max(0.0),
-                    });
-                }
-            }
-            "stretch-reflex" => {
-                if let (Some(ms), Some(g)) = (get(d, "delay_ms"), get(d, "gain")) {
-                    stretch_reflex = Some(StretchReflex {
-                        delay_ms: ms.max(0.0),
-                        gain_n_s_per_m: g.max(0.0),
-                    });
-                }
-            }
-            _ => {}
+        for c in &d.causes {
+            add_effect(&mut effects, &mut stretch_reflex, &c.name, &c.parameters);
         }
         let m = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
         ExtendedModel {
             fitted_to: d.session.clone(),
             cause: d.cause.clone(),
+            causes: d.causes.iter().map(|c| c.name.clone()).collect(),
             gain: d.gain.unwrap_or(0.0),
             moving_mass_x_kg: m("moving_mass_x_kg"),
             moving_mass_y_kg: m("moving_mass_y_kg"),

@@ -101,10 +101,12 @@ pub fn table(d: &Diagnosis) -> String {
             "rank", "candidate", "balance", "gain %", "NRMSE", "t", "verdict"
         );
         for (i, r) in d.ranking.iter().enumerate() {
-            let verdict = if r.name == d.cause {
+            let verdict = if d.causes.iter().any(|c| c.name == r.name) {
                 "CAUSE"
             } else if r.significant {
                 "also"
+            } else if r.t_statistic > 0.0 && r.gain > 0.0 && !r.rejected.is_empty() {
+                "rejected"
             } else {
                 "-"
             };
@@ -121,7 +123,31 @@ pub fn table(d: &Diagnosis) -> String {
                 fmt_params(&r.parameters, &r.parameter_se)
             );
         }
+        for r in d
+            .ranking
+            .iter()
+            .filter(|r| !r.rejected.is_empty() && r.gain > 0.0)
+        {
+            let _ = writeln!(out, "{:<21} {}", r.name, r.rejected.join("; "));
+        }
         let _ = writeln!(out);
+    }
+    if d.causes.len() > 1 {
+        let _ = writeln!(
+            out,
+            "causes: {}",
+            d.causes
+                .iter()
+                .map(|c| format!(
+                    "{} ({} balance, held-out gain {:.1} %: {})",
+                    c.name,
+                    c.balance,
+                    100.0 * c.gain,
+                    fmt_params(&c.parameters, &c.parameter_se)
+                ))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
     }
     let _ = writeln!(
         out,
