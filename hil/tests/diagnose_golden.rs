@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "fa0569ce02c2dead1c4503f966cf3b4b0bf5d564d73d42d0cda3b06ad7470ba4",
+        "eb77337e92afbc0cee8b99433bfce61fcf7cbd767f1115804f446f852ca94380",
     ),
     (
         "example-friction",
-        "1bb20d6f7ba76574ceed1d4dad636a50d9479ccafc5e228f24675dda8c61fbf3",
+        "0cf05fd8cf1bcb3d6d231dbc98eeea45f63375524eaed4495b1472c5d3470067",
     ),
     (
         "example-nuisance",
-        "1d22235903dcbd3a1d9f920eb7b50954ee3595087a2345c2bb98d2e353b61dda",
+        "bda59e2a6cca56bcc2d2704851dc468d10152e71050e5d90ce7067d96a353f2d",
     ),
     (
         "example-rotation-mass",
-        "10e3715bfea98f3e9faeb5062b9d5df99364a7c3f233034ff3ad4a1f3f052652",
+        "d1c67c991aeb8101f470b212dbf1120d78831a79a89146f7d3e35773c58cd22a",
     ),
 ];
 

@@ -1,8 +1,13 @@
-//! The two measured-style sessions from the independent emulated rig
+//! The measured-style sessions from the independent emulated rig
 //! (`shared/recordings/`): their hidden effects are disclosed, so they check the
 //! diagnosis on data the project did not make. `example-none` must yield no cause;
 //! `example-friction` must yield rail friction with the disclosed
 //! `Fc = 2.66 N, b = 5.29 N s/m` within 20 % (the tolerance) and a large gain.
+//! The two realistic ones carry a real rig's nuisances (sensor offset and drift, motor
+//! gain error and current noise, varying reaches, a drifting subject):
+//! `example-nuisance` hides nothing and must yield no cause; `example-rotation-mass`
+//! hides a sensor rotation of 6.31° and 0.781 kg of extra handle mass, and must yield
+//! both, the angle within 1° and the mass within 20 %.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
@@ -59,4 +64,45 @@ fn example_friction_names_rail_friction_with_disclosed_parameters() {
     assert!(d.gain.unwrap() > 0.5);
     // Friction leaves every other candidate far behind.
     assert!(d.ranking[1].gain < 0.5 * d.ranking[0].gain);
+}
+
+#[test]
+fn example_nuisance_names_no_cause() {
+    let Some(dir) = shared("example-nuisance") else {
+        return;
+    };
+    let d = diagnose(&Session::read(&dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    for r in &d.ranking {
+        eprintln!(
+            "{} {:.3} {:?} {:?}",
+            r.name, r.gain, r.parameters, r.rejected
+        );
+    }
+    assert_eq!(d.cause, "none");
+    assert!(d.causes.is_empty(), "{:?}", d.causes);
+}
+
+#[test]
+fn example_rotation_mass_names_both_effects_with_their_sizes() {
+    let Some(dir) = shared("example-rotation-mass") else {
+        return;
+    };
+    let d = diagnose(&Session::read(&dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    for r in &d.ranking {
+        eprintln!(
+            "{} {:.3} {:?} {:?}",
+            r.name, r.gain, r.parameters, r.rejected
+        );
+    }
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    let by = |n: &str| d.causes.iter().find(|c| c.name == n).unwrap();
+    let angle = by("sensor-rotation").parameters["angle_deg"];
+    assert!((angle - 6.313).abs() < 1.0, "angle {angle}");
+    let mass = by("handle-mass").parameters["extra_mass_kg"];
+    assert!((mass - 0.781).abs() < 0.2 * 0.781, "mass {mass}");
 }

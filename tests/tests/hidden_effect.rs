@@ -1,45 +1,41 @@
 //! Hidden-effect discovery: sessions from the project's runtime, each hiding one
 //! catalog effect, plant side or human side, with drawn parameters (or none),
-//! diagnosed blind.
+//! diagnosed blind. Every session has a lab's nuisances (the generator's default,
+//! `NuisanceConfig::REALISTIC`): a force sensor tared 0.05–0.3 N off and drifting up to
+//! 0.1 N, motor force constants within 1 %, current-loop noise of 0.1–0.3 N RMS that is
+//! not in the logged command, reaction times of 0.20–0.35 s, reach durations ±13 %, end
+//! points scattered by 2–4 mm, and an impedance trending by up to 10 % over the session.
 //!
-//! Asserted per session: the effect's name; each hidden parameter within 20 % (the
-//! issue's tolerance); a held-out gain of at least 50 % (the effects are drawn large
-//! enough to matter, and the balance recovers them almost exactly, so a smaller gain
-//! would mean the model is wrong, not that the effect is small); for `none`, that no
-//! cause is named. The actuation delay meets the 50 % since the balance filter of
-//! `discrepancy/signals.rs` (gain 0.65 at seed 14; 7 of 10 sweep seeds with a 1–1.5 ms
-//! delay at ≥ 50 %, the rest 0.22–0.44, see `tests/tests/hidden_delay.rs`).
+//! Asserted per session: the effect's name; each hidden parameter within 20 %; a
+//! held-out gain of at least 50 % (the plant effects are drawn large enough to matter
+//! and the balance recovers them almost exactly); for `none`, that no cause is named.
+//! Two exceptions, each measured on the sweep's seeds 1000–1009:
 //!
-//! Human side (hand balance, 32 trials of which 24 perturbed at 4 pairs of opposite
-//! directions; full 2×2 `D` and `K`, fitted on the odd parts of each pair's mean
-//! responses, tested on the 12 repetitions, every row whitened in time and between the
-//! axes by the noise read from the repetitions' spread, the muscles without tone at half
-//! weight in the feedback shape, `hil/src/discrepancy/hand.rs`): `grip-compliance` is
-//! found with gains of 78–91 % (seed 21: k within 20 %). `handle-mass` is found with its
-//! mass within 20 % and explains 65–89 % of the hand balance's residual (seed 1003:
-//! 0.741 kg for 0.725, gain 0.79); the floor is the arm's motor noise (weighted hand
-//! baseline NRMSE 0.04–0.08 with no effect). `stretch-reflex` (15–35 ms, 100–250 N s/m)
-//! is named in 20 of 20 sweep sessions, 14 with both parameters within 20 %, but on this
-//! layout its held-out gain is 0.16–0.65 (2 of 20 at 50 %): what a reflex model adds over
-//! the free damping is its delay's part, and 24 pulses of 150 ms carry little of it
-//! against the motor noise. A session laid out to measure a reflex
-//! ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) meets all three criteria on 19
-//! of 20 sweep seeds; `hidden_stretch_reflex_is_found` asserts them on it,
-//! `hidden_stretch_reflex_is_named_under_motor_noise` the name and parameters on the
-//! shared layout, `more_pulses_lower_the_hand_noise_floor` that the floor is the pulses'
-//! noise.
-//! Sweep (`sweep_confusion_matrix`, seeds 1000–1019, matrix in the README; 462 s): every
-//! effect named in 20 of 20, none in 20 of 20 sessions hiding nothing; parameters within
-//! 20 % on 20/20 for each but rail friction (19) and the reflex (14).
+//! - `actuation-delay` is held to the decision's own 10 % floor: the current-loop
+//!   noise is a floor no plant model removes, and a 0.75–1.5 ms delay explains
+//!   0.12–0.42 of the cart balance's residual above it (its delay is found within 20 %
+//!   in 10 of 10).
+//! - `stretch-reflex` on the shared layout (24 pulses of 150 ms) is named in 7 of 10,
+//!   with both parameters within 20 % in 2; a session laid out to measure a reflex
+//!   ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) is what
+//!   `hidden_stretch_reflex_is_found` asserts.
+//!
+//! Human side (hand balance, full 2×2 `D` and `K` fitted on the odd parts of each pair
+//! of opposite pulses, tested on the 12 repetitions, rows whitened in time and between
+//! the axes, `hil/src/discrepancy/hand.rs`). The sweeps (`sweep_confusion_matrix`,
+//! `sweep_false_alarms`, ignored; numbers in the README) give the confusion matrix and
+//! the false-alarm rate on sessions hiding nothing.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
 use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design, parse_pulse};
 
-/// The shared layout without the arm's motor noise.
+/// The shared layout on the ideal rig and without the arm's motor noise: what is left
+/// is the balance's own structural floor.
 const QUIET: Design = Design {
     motor_noise: false,
+    nuisance: None,
     ..Design::SHARED
 };
 
@@ -107,9 +103,11 @@ fn hidden_force_ripple_is_found() {
     check("force-ripple", 13);
 }
 
+/// Held to the decision's 10 % floor, not 50 %: see the module docs (the current-loop
+/// noise sets the cart balance's floor).
 #[test]
 fn hidden_actuation_delay_is_found() {
-    check("actuation-delay", 14);
+    check_with_gain("actuation-delay", 14, 0.10);
 }
 
 #[test]
@@ -257,6 +255,50 @@ fn more_pulses_lower_the_hand_noise_floor() {
     assert_eq!(few.cause, "none", "{:?}", few.parameters);
     assert_eq!(many.cause, "none", "{:?}", many.parameters);
     assert!((0.45..=0.80).contains(&(b / a)), "ratio {}", b / a);
+}
+
+/// The false-alarm rate: `SWEEP_SEEDS` (default 60) realistic sessions hiding nothing
+/// (seeds 2000 on), each diagnosed blind; prints every named cause and the rate with
+/// its exact one-sided 95 % upper bound, and asserts at most 5 %.
+#[test]
+#[ignore = "about 60 sessions; run with --ignored to measure the false-alarm rate"]
+fn sweep_false_alarms() {
+    let seeds: u64 = std::env::var("SWEEP_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(60);
+    let mut alarms = 0;
+    for seed in 0..seeds {
+        let (_, d) = run("none", 2000 + seed);
+        if !d.causes.is_empty() {
+            alarms += 1;
+            eprintln!("seed {}: named {:?}", 2000 + seed, d.causes);
+        }
+    }
+    // Exact binomial upper bound for `alarms` in `seeds`: p with P(X ≤ alarms) = 0.05.
+    let n = seeds as f64;
+    let cdf = |p: f64| {
+        (0..=alarms)
+            .map(|k: u64| {
+                let k = k as f64;
+                let ln_c = (1..=alarms.min(seeds))
+                    .take(k as usize)
+                    .fold(0.0, |a, i| a + ((n - i as f64 + 1.0) / i as f64).ln());
+                (ln_c + k * p.ln() + (n - k) * (1.0 - p).ln()).exp()
+            })
+            .sum::<f64>()
+    };
+    let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if cdf(mid) > 0.05 { lo = mid } else { hi = mid }
+    }
+    println!(
+        "false alarms: {alarms} of {seeds} sessions hiding nothing ({:.1} %, 95 % upper bound {:.1} %)",
+        100.0 * alarms as f64 / n,
+        100.0 * hi
+    );
+    assert!(alarms as f64 <= 0.05 * n, "{alarms} of {seeds}");
 }
 
 #[test]
