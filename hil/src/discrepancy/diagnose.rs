@@ -369,6 +369,9 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         + if hand.is_ok() { HUMAN_SIDE.len() } else { 0 };
     let alpha_each = opts.alpha / judged.max(1) as f64;
 
+    // What bounds the session's forces and motions, for both balances' checks.
+    let scale = SessionScale::of(&signals);
+
     // ---- the cart balance (plant side) ----
     let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
     let mut baseline_fit = None;
@@ -447,7 +450,6 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             .collect();
         // The physical checks, for the candidates that passed the statistical ones
         // (the evidence check re-forms every trial's residual).
-        let scale = SessionScale::of(&signals);
         for (r, cf) in &mut plant_ranked {
             let c = cf.candidate.as_ref();
             let s = cf.fit.setting;
@@ -487,7 +489,6 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let mut hand_ranked: Vec<Ranked> = Vec::new();
     let mut hand_df = None;
     let mut hand_t = None;
-    let hand_scale = SessionScale::of(&signals);
     let hand = match hand {
         Ok(h) => {
             let base_nrmse = h.baseline.nrmse();
@@ -541,7 +542,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 if !c.physical(fit.setting, &fit.beta) {
                     rejected.push("unphysical: a negative mass or reflex gain".to_string());
                 }
-                rejected.extend(immaterial(c.name(), &parameters, &hand_scale, 0.0));
+                rejected.extend(immaterial(c.name(), &parameters, &scale, 0.0));
                 rejected.extend(at_edge(
                     c.name(),
                     c.setting(fit.setting),

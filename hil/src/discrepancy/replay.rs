@@ -27,7 +27,7 @@ use super::bands::{BandError, band_errors};
 use super::error::DiscrepancyError;
 use super::model::ExtendedModel;
 use super::subject_fit::{FitOptions, SubjectFit, fit_subject};
-use crate::protocol::{EstimateConfig, Protocol, VirtualSubject};
+use crate::protocol::{EstimateConfig, Protocol, VirtualSubject, whole_ticks};
 use crate::rehearse::record::{Layout, tick_time_s, to_trial};
 use crate::rehearse::trial::simulate;
 use crate::rehearse::{TICK_HZ, TrialPlan, TrialTask};
@@ -204,10 +204,6 @@ pub(crate) fn noise_free(protocol: &Protocol) -> Protocol {
     p.subjects.arm.noise.activation_cv = 0.0;
     p.plant.force_noise_rms_n = 0.0;
     p
-}
-
-fn whole_ticks(s: f64) -> f64 {
-    (s * TICK_HZ as f64).round() / TICK_HZ as f64
 }
 
 /// One trial replayed: its table and the simulated pulse onset on the table clock.

@@ -31,6 +31,12 @@ pub(crate) use rigtwin_device::config::Checker;
 /// The 4 kHz control clock whose ticks every protocol duration must be made of.
 const CONTROL_RATE: Option<rigtwin_device::time::Rate> = rigtwin_device::time::Rate::new(4000);
 pub use error::{InvalidKey, ProtocolError};
+
+/// `s` rounded to whole ticks of the 4 kHz control clock, s.
+pub(crate) fn whole_ticks(s: f64) -> f64 {
+    let hz = f64::from(rigtwin_device::Rate::CONTROL.hz());
+    (s * hz).round() / hz
+}
 pub use subjects::{SubjectSpread, SubjectsConfig, VirtualSubject};
 
 /// The shipped protocols, by name: (name, file text).

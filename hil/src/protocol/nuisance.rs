@@ -28,7 +28,7 @@ use rigtwin_world::RigNuisance;
 use serde::{Deserialize, Serialize};
 
 use super::seed::{Stream, mix, trial_seed};
-use super::{Checker, Protocol, VirtualSubject};
+use super::{Checker, Protocol, VirtualSubject, whole_ticks};
 
 /// The ranges the nuisances are drawn from. A range `[lo, hi]` is drawn uniformly; a
 /// single bound `b` is drawn uniformly in `[−b, b]` unless said otherwise.
@@ -224,12 +224,6 @@ pub struct TrialNuisance {
     pub movement_s: f64,
     /// The factor on the subject's co-contraction (impedance).
     pub impedance_scale: f64,
-}
-
-/// Rounds `s` to whole 4 kHz ticks.
-fn whole_ticks(s: f64) -> f64 {
-    let hz = f64::from(rigtwin_device::Rate::CONTROL.hz());
-    (s * hz).round() / hz
 }
 
 impl TrialNuisance {
