@@ -5,23 +5,14 @@ mod common;
 
 use std::f64::consts::PI;
 
+use common::{bare, push};
 use rigtwin_device::{MotorCommand, RigIo, Tick};
 use rigtwin_world::config::{
-    ActuationDelay, Attachment, ForceRipple, Grasp, GripCompliance, HandleMass, RailFriction,
-    RigConfig, SensorEffect,
+    ActuationDelay, ForceRipple, Grasp, GripCompliance, HandleMass, RailFriction, RigConfig,
+    SensorEffect,
 };
 use rigtwin_world::effects::{friction_force_n, ripple_force_n};
 use rigtwin_world::{SimRig, StepTruth, TICK_S};
-
-/// Bare handle, no noise.
-fn bare() -> RigConfig {
-    RigConfig {
-        attachment: Attachment::None,
-        force_noise_rms_n: 0.0,
-        initial_handle_m: [0.0, 0.0],
-        ..RigConfig::default()
-    }
-}
 
 /// Runs `ticks` ticks with command `f(tick)`, returns (positions, truths, readings).
 fn run(
@@ -39,13 +30,6 @@ fn run(
         r.push(rig.read(Tick(k + 1)).unwrap().force_raw_n);
     }
     (p, t, r)
-}
-
-fn push(k: u64) -> [f64; 2] {
-    [
-        6.0 * (2.0 * PI * k as f64 * TICK_S).sin(),
-        4.0 * (3.0 * PI * k as f64 * TICK_S).cos(),
-    ]
 }
 
 #[test]

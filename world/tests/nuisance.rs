@@ -2,27 +2,14 @@
 //! their laws, and a rig without them is the rig it was before.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
+mod common;
+
 use std::f64::consts::PI;
 
+use common::{bare, push};
 use rigtwin_device::{MotorCommand, RigIo, Tick};
 use rigtwin_world::config::{Attachment, RigConfig, RigNuisance};
 use rigtwin_world::{SimRig, StepTruth, TICK_S};
-
-fn bare() -> RigConfig {
-    RigConfig {
-        attachment: Attachment::None,
-        force_noise_rms_n: 0.0,
-        initial_handle_m: [0.0, 0.0],
-        ..RigConfig::default()
-    }
-}
-
-fn push(k: u64) -> [f64; 2] {
-    [
-        6.0 * (2.0 * PI * k as f64 * TICK_S).sin(),
-        4.0 * (3.0 * PI * k as f64 * TICK_S).cos(),
-    ]
-}
 
 fn run(cfg: RigConfig, ticks: u64) -> (Vec<StepTruth>, Vec<[f64; 2]>) {
     let mut rig = SimRig::with_seed(cfg, 7).unwrap();

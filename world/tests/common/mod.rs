@@ -2,7 +2,10 @@
 //! cart PD, and configs.
 #![allow(dead_code)]
 
+use std::f64::consts::PI;
+
 use nalgebra::Vector2;
+use rigtwin_world::TICK_S;
 use rigtwin_world::config::{Attachment, Grasp, RigConfig};
 
 /// Minimum-jerk position, velocity and acceleration from `a` to `b` over `d_s` at `t_s`.
@@ -41,4 +44,22 @@ pub fn arm_config(grasp: Grasp) -> RigConfig {
 /// RMS of a slice.
 pub fn rms(x: &[f64]) -> f64 {
     (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
+/// The bare handle at the origin, no sensor noise.
+pub fn bare() -> RigConfig {
+    RigConfig {
+        attachment: Attachment::None,
+        force_noise_rms_n: 0.0,
+        initial_handle_m: [0.0, 0.0],
+        ..RigConfig::default()
+    }
+}
+
+/// A smooth two-axis motor command at tick `k`, N.
+pub fn push(k: u64) -> [f64; 2] {
+    [
+        6.0 * (2.0 * PI * k as f64 * TICK_S).sin(),
+        4.0 * (3.0 * PI * k as f64 * TICK_S).cos(),
+    ]
 }
