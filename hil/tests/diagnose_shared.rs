@@ -66,11 +66,10 @@ fn example_friction_names_rail_friction_with_disclosed_parameters() {
     assert!(d.ranking[1].gain < 0.5 * d.ranking[0].gain);
 }
 
-#[test]
-fn example_nuisance_names_no_cause() {
-    let Some(dir) = shared("example-nuisance") else {
-        return;
-    };
+/// The diagnosis of shared session `name` with every candidate's verdict printed, or
+/// `None` when the recordings are absent.
+fn diagnosis_of(name: &str) -> Option<rigtwin::discrepancy::Diagnosis> {
+    let dir = shared(name)?;
     let d = diagnose(&Session::read(&dir).unwrap(), &DiagnoseOptions::default())
         .unwrap()
         .diagnosis;
@@ -80,24 +79,23 @@ fn example_nuisance_names_no_cause() {
             r.name, r.gain, r.parameters, r.rejected
         );
     }
+    Some(d)
+}
+
+#[test]
+fn example_nuisance_names_no_cause() {
+    let Some(d) = diagnosis_of("example-nuisance") else {
+        return;
+    };
     assert_eq!(d.cause, "none");
     assert!(d.causes.is_empty(), "{:?}", d.causes);
 }
 
 #[test]
 fn example_rotation_mass_names_both_effects_with_their_sizes() {
-    let Some(dir) = shared("example-rotation-mass") else {
+    let Some(d) = diagnosis_of("example-rotation-mass") else {
         return;
     };
-    let d = diagnose(&Session::read(&dir).unwrap(), &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
-    for r in &d.ranking {
-        eprintln!(
-            "{} {:.3} {:?} {:?}",
-            r.name, r.gain, r.parameters, r.rejected
-        );
-    }
     let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
     assert_eq!(names.len(), 2, "{names:?}");
     let by = |n: &str| d.causes.iter().find(|c| c.name == n).unwrap();
