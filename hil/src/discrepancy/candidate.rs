@@ -342,9 +342,11 @@ impl Candidate for Baseline {
 pub fn force_gains(beta: &[f64]) -> Vec<(String, f64)> {
     let n = beta.len();
     let g = |axis: usize| {
-        (n >= 2 + NUISANCE_COLUMNS)
-            .then(|| 1.0 + beta[n - NUISANCE_COLUMNS + axis])
-            .unwrap_or(f64::NAN)
+        if n >= 2 + NUISANCE_COLUMNS {
+            1.0 + beta[n - NUISANCE_COLUMNS + axis]
+        } else {
+            f64::NAN
+        }
     };
     vec![
         ("motor_force_gain_x".to_string(), g(0)),

@@ -230,7 +230,7 @@ pub fn evidence_r2(
     }
     let lo = pts.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
     let hi = pts.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return Ok(None);
     }
     let mut bins = vec![(0.0, 0.0, 0usize); BINS];

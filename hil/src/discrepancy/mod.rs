@@ -54,7 +54,7 @@ pub use diagnose::{
 };
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
-pub use gram::Gram;
+pub use gram::{Gram, Intercepts};
 pub use hand::{
     FEEDBACK_DELAYS_MS, FIT_ARM_MASS_SCALE, GRIP_STIFFNESS_N_PER_M, GRIP_TIME_S, GripCompliance,
     HandBaseline, HandCandidate, HandFit, HandJudgement, HandleMass, Kin, REFLEX_DELAY_MS,
