@@ -474,7 +474,10 @@ fn rehearse_with_a_model_adds_its_rail_friction_to_the_motor_commands() {
 /// per sample on each of the two entities, and it accounts for the session's `[timing]`:
 /// the held shares of the samples add up to exactly the deadlines the loop missed
 /// (a sample is a block of 4 ticks; shares are multiples of 1/4, exact in f64), and every
-/// latency is under one period (it is measured from the deadline of the tick that is due).
+/// latency but the last sample's is under one period: it is measured from the deadline of
+/// the latest tick that is due, so a later wake-up skips ticks instead. The trial's last
+/// tick has none left to skip to, so a loaded machine can wake it more than a period late;
+/// that latency is real, and only asked to be non-negative.
 #[test]
 fn a_real_time_rehearsal_puts_its_clock_on_the_timeline() {
     let dir = tempfile::tempdir().unwrap();
@@ -500,10 +503,11 @@ fn a_real_time_rehearsal_puts_its_clock_on_the_timeline() {
     let held = scalar_rows(&chunks, paths::TIMING_HELD);
     assert_eq!(wake.len(), samples);
     assert_eq!(held.len(), samples);
-    assert!(
-        wake.iter()
-            .all(|r| r.len() == 1 && (0.0..250.0).contains(&r[0]))
-    );
+    assert!(wake.iter().all(|r| r.len() == 1 && r[0] >= 0.0), "{wake:?}");
+    let (last, before) = wake.split_last().unwrap();
+    let over: Vec<f64> = before.iter().map(|r| r[0]).filter(|&us| us >= 250.0).collect();
+    assert!(over.is_empty(), "latencies of a period or more: {over:?}");
+    assert!(last[0].is_finite());
     assert!(held.iter().all(|r| (0.0..=1.0).contains(&r[0])));
     let held_ticks: f64 = held.iter().map(|r| r[0] * 4.0).sum();
     assert_eq!(held_ticks, timing.missed_deadlines as f64, "{timing:?}");
