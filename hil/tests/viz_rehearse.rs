@@ -505,7 +505,11 @@ fn a_real_time_rehearsal_puts_its_clock_on_the_timeline() {
     assert_eq!(held.len(), samples);
     assert!(wake.iter().all(|r| r.len() == 1 && r[0] >= 0.0), "{wake:?}");
     let (last, before) = wake.split_last().unwrap();
-    let over: Vec<f64> = before.iter().map(|r| r[0]).filter(|&us| us >= 250.0).collect();
+    let over: Vec<f64> = before
+        .iter()
+        .map(|r| r[0])
+        .filter(|&us| us >= 250.0)
+        .collect();
     assert!(over.is_empty(), "latencies of a period or more: {over:?}");
     assert!(last[0].is_finite());
     assert!(held.iter().all(|r| (0.0..=1.0).contains(&r[0])));

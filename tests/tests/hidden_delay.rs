@@ -1,16 +1,17 @@
-//! Actuation delay on the project's plant: the delay model must remove most of the
-//! cart-balance residual that a hidden 0.75–1.5 ms drive latency leaves, not only name it.
+//! Actuation delay on the project's plant: the delay model must remove what a hidden
+//! 0.75–1.5 ms drive latency adds to the cart balance's residual, not only name it.
 //!
-//! A 1–1.5 ms delay makes the stiff position loop ring at 170–225 Hz with tens of
-//! newtons in the command. Before the balance filter (`signals.rs`) the smoothed
-//! command and the smoothed acceleration leaked that ring differently, and the fitted
-//! delay left ~60 % of the residual: held-out gain 0.17–0.45 over seeds 1000–1009 and
-//! 14, the delay found at 1.0–1.1 ms whatever was hidden. With the balance filter and
-//! a one-tick nominal latency the residual with the delay falls to the level of
-//! effect-free sessions (NRMSE 0.010–0.019 vs 0.015–0.018), the delay is found within
-//! 0.125 ms, and the gain is 0.42–0.67 for 1–1.5 ms (≥ 0.5 in 7 of 10 seeds) but 0.22
-//! for the 0.75 ms of seed 1006, a third of which the baseline's one-tick latency
-//! already takes. `sweep_delay_gain` prints them.
+//! On a realistic session (the generator's default nuisances) the cart balance's
+//! residual has a floor no plant model removes: the current loop's noise, 0.1–0.3 N RMS,
+//! is in the force but not in the logged command. The held-out gain `1 − e/b` is then
+//! bounded by the floor (0.21–0.38 on seeds 1000–1004), so what is asserted is the share
+//! of the excess over the floor that the delay model removes, `(b² − e²)/(b² − f²)`, with
+//! `b` and `e` the baseline's and the extended model's held-out NRMSE and `f` the
+//! baseline's on the same seed's session hiding nothing (the same subject, nuisances and
+//! noise: the generator's seed sets them whatever is hidden). Measured on seeds
+//! 1000–1004: 0.91–1.09 (the extended model reaches the floor); `sweep_delay_gain`
+//! prints the gains. How the delay became identifiable at all (the balance filter, the
+//! one-tick nominal latency) is in `hil/src/discrepancy/signals.rs`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};
@@ -67,10 +68,11 @@ fn report(effect: &str, seed: u64, h: &Hidden, d: &Diagnosis) {
 }
 
 /// Seed 1003 hides 1.25 ms. Asserted: the cause, the delay within 20 % (the issue's
-/// tolerance; the world rounds it to whole 0.25 ms ticks, the grid is 25 µs) and a
-/// held-out gain of at least 50 % (the bar; measured 0.67).
+/// tolerance; the world rounds it to whole 0.25 ms ticks, the grid is 25 µs) and at
+/// least 80 % of the excess over the rig's floor removed (module docs; measured 1.03
+/// here, 0.91–1.09 on seeds 1000–1004; a model that only named the delay would leave it).
 #[test]
-fn hidden_delay_gain_reaches_half() {
+fn hidden_delay_removes_the_excess_over_the_floor() {
     let (h, d) = run("actuation-delay", 1003, None);
     report("actuation-delay", 1003, &h, &d);
     assert_eq!(d.cause, "actuation-delay");
@@ -80,7 +82,17 @@ fn hidden_delay_gain_reaches_half() {
         (got - truth).abs() <= 0.2 * truth,
         "delay {got} ms, hidden {truth} ms"
     );
-    assert!(d.gain.unwrap() >= 0.5, "gain {:?}", d.gain);
+    let (_, none) = run("none", 1003, None);
+    assert_eq!(none.cause, "none", "{:?}", none.parameters);
+    let (b, e) = (d.baseline_nrmse.unwrap(), d.extended_nrmse.unwrap());
+    let f = none.cart_baseline_nrmse.unwrap();
+    let removed = (b * b - e * e) / (b * b - f * f);
+    eprintln!("baseline {b:.4}, extended {e:.4}, floor {f:.4}: {removed:.3} of the excess removed");
+    assert!(b > f, "the delay added nothing over the floor: {b} vs {f}");
+    assert!(
+        removed >= 0.8,
+        "{removed:.3} of the excess over the floor removed"
+    );
 }
 
 /// The held-out gains of the delay, friction and none sessions of seeds

@@ -103,6 +103,43 @@ impl Gram {
         self.yty = self.yty.max(0.0);
     }
 
+    /// The Gram of the first `p − q` columns once the last `q` (nuisance columns of one
+    /// group of rows, free per group) are fitted out: the Schur complement of their block,
+    /// so that a fit on the result equals the fit that carries them (Frisch–Waugh) and
+    /// Grams so reduced still add over groups. A rank-deficient nuisance block (a group
+    /// too short for its columns) is inverted in the least-squares sense (pseudo-inverse,
+    /// relative tolerance 1e-12), which removes what the columns can explain and no more.
+    #[must_use]
+    pub fn eliminate_trailing(&self, q: usize) -> Gram {
+        let p = self.p;
+        if q == 0 || q > p {
+            return if q == 0 { self.clone() } else { Gram::new(0) };
+        }
+        let k = p - q;
+        let at = |i: usize, j: usize| self.xtx[i * p + j];
+        let ann = DMatrix::from_fn(q, q, |i, j| at(k + i, k + j));
+        let scale = ann.diagonal().max().max(f64::MIN_POSITIVE);
+        let inv = (ann / scale)
+            .pseudo_inverse(1e-12)
+            .map_or_else(|_| DMatrix::zeros(q, q), |m| m / scale);
+        // `A_kn Ann⁻¹` for the kept columns and for the target.
+        let axn = DMatrix::from_fn(k, q, |i, j| at(i, k + j));
+        let bn = DVector::from_fn(q, |i, _| self.xty[k + i]);
+        let proj = &axn * &inv;
+        let red = &proj * axn.transpose();
+        let mut g = Gram::new(k);
+        for i in 0..k {
+            for j in 0..k {
+                g.xtx[i * k + j] = at(i, j) - red[(i, j)];
+            }
+            g.xty[i] = self.xty[i] - (proj.row(i) * &bn)[(0, 0)];
+        }
+        g.yty = (self.yty - (bn.transpose() * &inv * &bn)[(0, 0)]).max(0.0);
+        g.norm_sq = self.norm_sq;
+        g.n = self.n;
+        g
+    }
+
     /// Sum of several Grams of the same size.
     #[must_use]
     pub fn sum<'a>(p: usize, grams: impl IntoIterator<Item = &'a Gram>) -> Gram {
@@ -213,6 +250,48 @@ mod tests {
     /// of squares of the fit that carries the two constants as columns (to 1e-9
     /// relative: the two are the same normal equations, eliminated in a different
     /// order).
+    /// Eliminating trailing nuisance columns gives the kept coefficients and the residual
+    /// sum of squares of the fit that carries them (to 1e-9 relative: the same normal
+    /// equations, solved by blocks), and a reduced Gram per group adds up to the fit with
+    /// one set of nuisance columns per group.
+    #[test]
+    fn eliminated_columns_equal_the_explicit_fit() {
+        let row = |i: usize| {
+            let t = i as f64 * 0.01;
+            let g = i % 2;
+            let x = [t.sin(), (3.0 * t).cos() + 0.1 * t];
+            let y = 2.0 * x[0] - 0.5 * x[1]
+                + [0.7, -1.3][g]
+                + [0.2, -0.4][g] * t
+                + 0.01 * (7.0 * t).sin();
+            (g, t, x, y)
+        };
+        let mut per_group = [Gram::new(4), Gram::new(4)];
+        let mut full = Gram::new(6);
+        for i in 0..200 {
+            let (g, t, x, y) = row(i);
+            per_group[g].push(&[x[0], x[1], 1.0, t], y, 1.0);
+            let mut c = [x[0], x[1], 0.0, 0.0, 0.0, 0.0];
+            c[2 + 2 * g] = 1.0;
+            c[3 + 2 * g] = t;
+            full.push(&c, y, 1.0);
+        }
+        let reduced = Gram::sum(2, &per_group.map(|g| g.eliminate_trailing(2)));
+        let b = reduced.solve().unwrap();
+        let bf = full.solve().unwrap();
+        for k in 0..2 {
+            assert!((b[k] - bf[k]).abs() < 1e-9 * bf[k].abs(), "{b:?} vs {bf:?}");
+        }
+        let (se, sf) = (reduced.sse(&b), full.sse(&bf));
+        assert!((se - sf).abs() < 1e-9 * sf, "{se} vs {sf}");
+        // A group with a single row cannot carry two columns: its row is explained away,
+        // nothing more (the pseudo-inverse), and nothing is NaN.
+        let mut one = Gram::new(3);
+        one.push(&[1.0, 1.0, 0.5], 2.0, 1.0);
+        let r = one.eliminate_trailing(2);
+        assert!(r.xtx[0].abs() < 1e-12 && r.yty.abs() < 1e-12, "{r:?}");
+    }
+
     #[test]
     fn absorbed_intercepts_equal_explicit_constants() {
         let rows: Vec<(usize, [f64; 2], f64)> = (0..200)

@@ -23,7 +23,10 @@
 //! position ratio of the arm's delayed feedback ([`feedback_velocity_ratio_s`]), and `τ`
 //! the feedback delay, searched once on a grid for the baseline and then kept for every
 //! candidate (like the cart balance's latency). `x_h` is the hand, equal to the handle
-//! for a rigid grip. The candidates, each nested on this baseline:
+//! for a rigid grip. Every response also carries a constant force per axis, fitted out
+//! and never named ([`RESPONSE_OFFSET_COLUMNS`]): what the trial and its references
+//! differ by over the window that is not the response. The candidates, each nested on
+//! this baseline:
 //!
 //! - `handle-mass`: `+ m_extra Δa` (isotropic): mass above the sensor that the manifest's
 //!   `m_h` did not remove. Identifiable only because `M_arm` is known.
@@ -493,22 +496,51 @@ pub fn whitened_rows(
     w: &Whitening,
     f: &mut dyn FnMut(&[f64], f64, f64),
 ) {
+    weighted_rows(c, r, s, fb_delay_s, w, 0, f);
+}
+
+/// The nuisance columns every response carries in [`hand_grams`]: a constant force
+/// per axis, free per response and fitted out of its Gram ([`Gram::eliminate_trailing`]),
+/// never named. It takes up what a perturbed trial and its unperturbed references differ
+/// by that is not the response and holds over the 0.3 s window: the force sensor's
+/// offset drifting between the trials, the subject's steady push toward an end point a
+/// few millimetres from the references'. A slope per axis as well (a reach faster or
+/// slower than its references) lowered the baseline's floor further but took up part of
+/// an extra mass's response (measured in the 2026-12-02 note of the README).
+pub const RESPONSE_OFFSET_COLUMNS: usize = 2;
+
+/// [`whitened_rows`] with `offsets` nuisance columns (0 or [`RESPONSE_OFFSET_COLUMNS`],
+/// one constant per axis) after the candidate's, weighted like them.
+fn weighted_rows(
+    c: &dyn HandCandidate,
+    r: &HandResponse,
+    s: usize,
+    fb_delay_s: f64,
+    w: &Whitening,
+    offsets: usize,
+    f: &mut dyn FnMut(&[f64], f64, f64),
+) {
     let phi = match r.rows.as_slice() {
         [a, b, ..] if w.noise_time_s > 0.0 => {
             (-((b - a) as f64 / r.rate_hz) / w.noise_time_s).exp()
         }
         _ => 0.0,
     };
-    // A row as one vector: regressors, then target and normaliser.
-    let cols = c.columns();
+    // A row as one vector: regressors, the nuisance columns, then target and normaliser.
+    let cols = c.columns() + offsets;
     let mut prev = [vec![0.0; cols + 2], vec![0.0; cols + 2]];
     let mut cur = prev.clone();
     let mut out = vec![0.0; cols + 2];
+    let mut nuisance = vec![0.0; offsets];
     let mut k = 0usize;
     c.rows(r, s, fb_delay_s, &mut |x, y, n| {
         let (axis, sample) = (k % 2, k / 2);
         k += 1;
-        let row = x.iter().chain([&y, &n]);
+        if offsets > 0 {
+            nuisance.iter_mut().for_each(|v| *v = 0.0);
+            nuisance[axis] = 1.0;
+        }
+        let row = x.iter().chain(&nuisance).chain([&y, &n]);
         for ((cu, p), v) in cur[axis].iter_mut().zip(prev[axis].iter_mut()).zip(row) {
             *cu = v - phi * *p;
             *p = *v;
@@ -524,7 +556,8 @@ pub fn whitened_rows(
     });
 }
 
-/// One trial's Grams at every setting, from the weighted rows (`whitened_rows`).
+/// One response's Grams at every setting, from the weighted rows (`whitened_rows`) with
+/// the response's own offset per axis fitted out ([`RESPONSE_OFFSET_COLUMNS`]).
 #[must_use]
 pub fn hand_grams(
     c: &dyn HandCandidate,
@@ -532,11 +565,12 @@ pub fn hand_grams(
     fb_delay_s: f64,
     w: &Whitening,
 ) -> Vec<Gram> {
+    let q = RESPONSE_OFFSET_COLUMNS;
     (0..c.settings())
         .map(|s| {
-            let mut g = Gram::new(c.columns());
-            whitened_rows(c, r, s, fb_delay_s, w, &mut |x, y, n| g.push(x, y, n));
-            g
+            let mut g = Gram::new(c.columns() + q);
+            weighted_rows(c, r, s, fb_delay_s, w, q, &mut |x, y, n| g.push(x, y, n));
+            g.eliminate_trailing(q)
         })
         .collect()
 }
@@ -1048,7 +1082,7 @@ mod tests {
             axes: Matrix2::new(2.0, 0.0, -0.7, 0.5),
             source: WeightSource::Residual,
         };
-        for w in [None, Some(mixing)] {
+        for w in [None, Some(mixing.clone())] {
             let mut g = Gram::new(base_columns());
             match &w {
                 None => HandBaseline.rows(&r, 0, fb, &mut |x, y, nrm| g.push(x, y, nrm)),
@@ -1070,6 +1104,27 @@ mod tests {
                 );
             }
         }
+        // A constant force per axis on top (a sensor offset drifted between the trial and
+        // its references): through the response's Grams, which fit one out per axis, the
+        // law comes back as before; without them it would be read as impedance.
+        let (ox, oy) = (0.3, -0.2);
+        r.df[0].iter_mut().for_each(|f| *f += ox);
+        r.df[1].iter_mut().for_each(|f| *f += oy);
+        let g = &hand_grams(&HandBaseline, &r, fb, &mixing)[0];
+        let Some(beta) = g.solve() else {
+            panic!("the baseline's columns are independent of the offsets here");
+        };
+        let got: std::collections::BTreeMap<String, f64> =
+            baseline_parameters(&beta, fb).into_iter().collect();
+        for (name, value) in want {
+            let v = got.get(name).copied().unwrap_or(f64::NAN);
+            // Exact data again; the elimination adds round-off of the offsets' block.
+            assert!(
+                (v - value).abs() < 1e-6 * value.abs().max(1.0),
+                "{name} with offsets: {v} vs {value}"
+            );
+        }
+        assert!(g.sse(&beta) < 1e-12 * g.norm_sq, "offsets left a residual");
     }
 
     /// A residual that is first-order autoregressive in time with the weighting's own
