@@ -14,10 +14,12 @@
 //! - `actuation-delay` is held to the decision's own 10 % floor: the current-loop
 //!   noise is a floor no plant model removes, and a 0.75–1.5 ms delay explains
 //!   0.12–0.42 of the cart balance's residual above it (its delay is found within 20 %
-//!   in 10 of 10).
-//! - `stretch-reflex` on the shared layout (24 pulses of 150 ms) is named in 7 of 10,
-//!   with both parameters within 20 % in 2; a session laid out to measure a reflex
-//!   ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) is what
+//!   in 10 of 10). What the delay model removes of the excess over that floor is
+//!   asserted in `hidden_delay.rs`.
+//! - `stretch-reflex` on the shared layout (24 pulses of 150 ms) is named in 10 of 10,
+//!   with both parameters within 20 % in 3 (the gain comes out high; see
+//!   `hidden_stretch_reflex_is_named_under_motor_noise`); a session laid out to measure
+//!   a reflex ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) is what
 //!   `hidden_stretch_reflex_is_found` asserts.
 //!
 //! Human side (hand balance, full 2×2 `D` and `K` fitted on the odd parts of each pair

@@ -506,7 +506,8 @@ pub fn whitened_rows(
 /// offset drifting between the trials, the subject's steady push toward an end point a
 /// few millimetres from the references'. A slope per axis as well (a reach faster or
 /// slower than its references) lowered the baseline's floor further but took up part of
-/// an extra mass's response (measured in the 2026-12-02 note of the README).
+/// an extra mass's response (measured in the README, "On sessions with a real rig's
+/// nuisances").
 pub const RESPONSE_OFFSET_COLUMNS: usize = 2;
 
 /// [`whitened_rows`] with `offsets` nuisance columns (0 or [`RESPONSE_OFFSET_COLUMNS`],
