@@ -54,87 +54,27 @@
 //! α 0.05) where twelve leave it 11 (2.91). Without opposite pairs the responses are
 //! averaged by direction ([`average_by_angle`]) and the folds run over directions.
 //!
-//! Measured on the hidden-effect sweep's sessions (`tests/tests/hidden_effect.rs`), odd
-//! parts against direction averages: the baseline's held-out NRMSE on sessions hiding
-//! nothing 0.04–0.17 instead of 0.11–0.16; hidden handle masses explain 0.15–0.79 of it
-//! (median 0.53) instead of 0.11–0.45; grips 0.58–0.91 instead of 0.57–0.77; reflexes
-//! named 10 of 20 instead of 5. Testing on the 4 pair units alone (df 3) missed 5 of 20
-//! masses that the replicate test finds.
-//!
 //! The weighting: every fit runs on rows whitened in time and between the axes
 //! ([`Whitening`], generalised least squares), because the residual is smooth (the arm's
-//! motor noise, a leaky Brownian motion of 50 ms) and largest along the reach, so
-//! unweighted its low band and its larger axis decide every fit and every held-out
-//! error. Same sweep, unweighted → whitened in time → and between the axes: reflexes
-//! named 10 → 15 → 19 of 20 (both parameters within 20 % 4 → 8 → 9); handle masses
-//! with a held-out gain ≥ 0.5 12 → 16 → 16 of 20 (median 0.53 → 0.62 → 0.59); grips
-//! 0.58–0.91 → 0.77–0.91; sessions hiding nothing stay `none` (20 of 20), their
-//! baseline NRMSE 0.04–0.08 weighted. The time constant is the arm's, not fitted: with
-//! 20, 50 and 200 ms (time only, 13 sessions hiding a reflex) 10, 11 and 10 were named.
-//! Then the untoned muscles at half weight in `S`
-//! ([`super::hand_signals::odd_part_weights`]): reflexes with both parameters within
-//! 20 % 9 → 12 of 20, everything else as before.
+//! motor noise, a leaky Brownian motion of 50 ms) and largest along the reach; the time
+//! constant is the arm's, not fitted, and the weighting between the axes is read from the
+//! spread of the single repetitions about their pair's mean
+//! ([`Whitening::from_repetitions`]), where a misfit common to them cancels, so that the
+//! weighting never weighs down the axis where a hidden effect shows.
 //!
-//! `W` from the noise, not from the residual: `Σ` was first the covariance of the
-//! baseline's residual, which holds, besides the noise, whatever the baseline misses;
-//! `W` then weighed down the very axis where a hidden effect shows (on generated seed
-//! 1000 hiding a reflex, whose misfit lies mostly across the reach, the residual gave
-//! `x` and `y` the diagonal weights 0.99 and 1.01, the noise alone 1.82 and 0.55). It
-//! is now the spread of the single repetitions about their pair's mean
-//! ([`Whitening::from_repetitions`]), where the misfit is common and cancels. Same
-//! sweep: handle masses with a held-out gain ≥ 0.5 16 → 20 of 20 (0.32–0.76 → 0.65–0.89),
-//! reflexes named 19 → 20 of 20, both parameters within 20 % 12 → 14, held-out gains
-//! 0.12–0.45 → 0.16–0.65 (2 of 20 at 0.5); grips 0.74–0.90 → 0.78–0.91; sessions hiding
-//! nothing stay `none` (20 of 20). Estimating the time filter from the repetitions too
-//! (AR(1), AR(2), AR(4) by Yule–Walker) or weighting the samples by the noise's
-//! variance over the window (within ±30 % of flat) changed the held-out gains by less
-//! than 0.03 on five reflex sessions: not kept.
+//! `d` is tied to `p` (`d = ρ p`): the arm's feedback is one PD law whose two gains a
+//! subject scales together (`feedback_gain` of `crate::protocol::subjects`); with both
+//! free, the delayed velocity column takes up what the baseline misses.
 //!
-//! Why `d` is tied to `p`: with both free, the delayed velocity column took up what the
-//! baseline missed (fitted `p` came out negative, −1260 N/m on a session hiding a
-//! reflex, where the arm's is +500) and with it most of an extra handle mass. The arm's
-//! feedback is one PD law whose two gains a subject scales together (`feedback_gain` of
-//! `crate::protocol::subjects`), so the ratio is the model's, not a free parameter.
-//! Measured on generated sessions (`cargo run --release -p rigtwin-tests --example
-//! generate -- <effect> <seed> <dir>`, seeds 1–6, then `rigtwin diagnose --json`):
-//! handle mass named 6/6 instead of 3/6, held-out gains 0.19–0.53 instead of 0.01–0.32,
-//! masses within 14 %; grip 4/4 with the same gains (0.64–0.79); 12 sessions hiding
-//! nothing stay `none`, their baseline NRMSE within ±0.01.
+//! What the data can and cannot tell: the grip and the extra mass change the response's
+//! inertia in ways the known `M_arm` cannot take up. A reflex is, to first order,
+//! `g S Δv − g δ S Δa`: its instantaneous part is taken up by the free `D`, and what
+//! tells `g` from `δ` is the curvature of `e^{−iωδ}` over the pulse's band (below
+//! ~10 Hz, `ωδ` < 2); brief pulses (50 ms, 30 N) reach the band where the delay shows
+//! (README, "What session measures a reflex").
 //!
-//! What the data can and cannot tell (measured on generated sessions, see
-//! `tests/tests/hidden_effect.rs`): the grip and the extra mass change the response's
-//! inertia in ways the known `M_arm` cannot take up, and are found. A reflex is, to
-//! first order, `g S Δv − g δ S Δa`: its instantaneous part is taken up by the free `D`,
-//! and what tells `g` from `δ` is the curvature of `e^{−iωδ}` over the pulse's band
-//! (below ~10 Hz, `ωδ` < 2). On sessions generated without the arm's motor noise
-//! (generator seeds 1, 2, 3, 5 with `--no-motor-noise`; asserted for seed 2 by
-//! `noise_free_reflex_is_found_and_nothing_else` in `tests/tests/hidden_effect.rs`)
-//! the delay comes out within 16 % and the gain 17 % low to 1 % high (held-out gains
-//! 0.71–0.82); that needed the odd parts (with direction averages the
-//! held-out gain fell monotonically from the grid's 10 ms edge) and the full `D` and
-//! `K` ([`base_columns`]), and the untoned muscles at half weight in `S` (with every
-//! weight 1 the gain came out 20–37 % low: such a muscle answers only its stretch).
-//! With motor noise the curvature is partly covered: on the shared layout (24 pulses
-//! of 150 ms), with `W` from the repetitions, all 20 drawn reflexes of the sweep are
-//! named, 14 with both parameters within 20 %, held-out gains 0.16–0.65 (median 0.37):
-//! the reflex's gain over this baseline is its delay's part alone. Brief pulses (50 ms,
-//! 30 N) reach the band where the delay shows; with 72 of them 20 of 20 have both
-//! parameters within 20 % and 19 a held-out gain of at least 0.5 (README, "What session
-//! measures a reflex").
-//!
-//! Measured and not kept, on the noise-free sessions above (seeds 1, 2, 3, 5):
-//! - every channel through the balance filter (position and velocity too, not only the
-//!   force and acceleration; at 10–15 Hz the balance filter passes 0.89–0.76 where the
-//!   Savitzky–Golay position and velocity filters pass 0.99–0.96): held-out gains
-//!   unchanged (0.72–0.82), the delays 5–12 ms shorter, 2–9 ms under the truth;
-//! - damping tied to stiffness as in the muscles (`D = τ_d K`, `K` symmetric plus an
-//!   antisymmetric part, one `τ_d` of 1/12 s): the baseline's NRMSE rose from
-//!   0.05–0.07 to 0.21–0.31 on sessions hiding nothing (the shipped arm's damping times
-//!   differ by muscle, 0.01–0.35 s, so its endpoint damping is no multiple of its
-//!   stiffness);
-//! - generating the arm with tone in its biarticular muscles (every weight 1): the
-//!   delays 4–22 ms long and the held-out gains lower (0.51–0.71), so the clipped
-//!   muscles are not what limits the fit.
+//! The experiments behind these choices, with their numbers, are in the dated note
+//! `hil/docs/notes/2026-12-02-hand-balance.md`.
 
 use nalgebra::{Matrix2, Vector2};
 use rayon::prelude::*;
@@ -1083,7 +1023,24 @@ mod tests {
             axes: Matrix2::new(2.0, 0.0, -0.7, 0.5),
             source: WeightSource::Residual,
         };
-        for w in [None, Some(mixing.clone())] {
+        // The coefficients of `g` against `want`; exact data, so only the normal
+        // equations' round-off (and the offsets' elimination) remains.
+        let recovers = |g: &Gram, what: &str| {
+            let Some(beta) = g.solve() else {
+                panic!("the baseline's columns are independent here ({what})");
+            };
+            let got: std::collections::BTreeMap<String, f64> =
+                baseline_parameters(&beta, fb).into_iter().collect();
+            for (name, value) in want {
+                let v = got.get(name).copied().unwrap_or(f64::NAN);
+                assert!(
+                    (v - value).abs() < 1e-6 * value.abs().max(1.0),
+                    "{name} {what}: {v} vs {value}"
+                );
+            }
+            beta
+        };
+        for w in [None, Some(mixing)] {
             let mut g = Gram::new(base_columns());
             match &w {
                 None => HandBaseline.rows(&r, 0, fb, &mut |x, y, nrm| g.push(x, y, nrm)),
@@ -1091,40 +1048,15 @@ mod tests {
                     g.push(x, y, nrm);
                 }),
             }
-            let Some(beta) = g.solve() else {
-                panic!("the baseline's columns are independent here");
-            };
-            let got: std::collections::BTreeMap<String, f64> =
-                baseline_parameters(&beta, fb).into_iter().collect();
-            for (name, value) in want {
-                let v = got.get(name).copied().unwrap_or(f64::NAN);
-                // Exact data: only the normal equations' round-off remains.
-                assert!(
-                    (v - value).abs() < 1e-6 * value.abs().max(1.0),
-                    "{name} with weighting {w:?}: {v} vs {value}"
-                );
-            }
+            recovers(&g, &format!("with weighting {w:?}"));
         }
         // A constant force per axis on top (a sensor offset drifted between the trial and
         // its references): through the response's Grams, which fit one out per axis, the
         // law comes back as before; without them it would be read as impedance.
-        let (ox, oy) = (0.3, -0.2);
-        r.df[0].iter_mut().for_each(|f| *f += ox);
-        r.df[1].iter_mut().for_each(|f| *f += oy);
+        r.df[0].iter_mut().for_each(|f| *f += 0.3);
+        r.df[1].iter_mut().for_each(|f| *f -= 0.2);
         let g = &hand_grams(&HandBaseline, &r, fb, &mixing)[0];
-        let Some(beta) = g.solve() else {
-            panic!("the baseline's columns are independent of the offsets here");
-        };
-        let got: std::collections::BTreeMap<String, f64> =
-            baseline_parameters(&beta, fb).into_iter().collect();
-        for (name, value) in want {
-            let v = got.get(name).copied().unwrap_or(f64::NAN);
-            // Exact data again; the elimination adds round-off of the offsets' block.
-            assert!(
-                (v - value).abs() < 1e-6 * value.abs().max(1.0),
-                "{name} with offsets: {v} vs {value}"
-            );
-        }
+        let beta = recovers(g, "with offsets");
         assert!(g.sse(&beta) < 1e-12 * g.norm_sq, "offsets left a residual");
     }
 
