@@ -142,11 +142,30 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
     let t1 = &report["trials"][0];
     let div = 4000 / protocol.recording.rate_hz as usize;
     let row_of = |key: &str| t1[key].as_u64().map_or(rows, |k| k as usize / div);
-    // Until the first missed deadline (or a trip) nothing was held: what follows holds
-    // there whatever the scheduler did later. (With 10 ms allowances a long stall can
+    // Until the first missed deadline (or a trip) of the controller, and the plant's
+    // first stall, nothing was held longer than a tick: what follows holds there
+    // whatever the scheduler did later. (With 10 ms allowances a long stall can
     // hold a command long enough to throw the handle and trip the velocity limit, as it
     // would on a rig: that is the 1 ms allowance's reason.)
-    let exact = row_of("first_miss_tick").min(row_of("trip_tick"));
+    // The plant's side of the same condition: its first stall (2 or more ticks without
+    // a fresh command: late datagrams or a late wake-up of the plant), from its output;
+    // a row of margin for the two ends' trial clocks. Single late datagrams hold a
+    // command for a tick; they are common on a loaded machine and inside the bound.
+    let stall = plant_out
+        .lines()
+        .find_map(|l| {
+            let rest = l.strip_prefix("trial 1: first stall (")?;
+            rest.split(" at tick ")
+                .nth(1)?
+                .split_whitespace()
+                .next()?
+                .parse::<usize>()
+                .ok()
+        })
+        .map_or(rows, |k| (k / div).saturating_sub(1));
+    let exact = row_of("first_miss_tick")
+        .min(row_of("trip_tick"))
+        .min(stall);
 
     // The handle follows the admittance: the rig's position loop tracks the reference
     // through a round trip of one tick over loopback. Measured: 0.03-0.6 mm at most over
@@ -162,12 +181,14 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
         "max |y - ref_y| = {worst} m over the first {exact} rows"
     );
 
-    // Equivalence with lock step: until the first missed deadline the trial over UDP is
-    // the lock-step trial of the same protocol and seed but for the wire's one tick of
-    // delay (the plant applies the command answering frame n at n + 1). Measured over a
-    // whole reach without a missed deadline: max |Δy| 0.06 mm, median 5 µm (the
-    // commands differ by 1.5 N median, the hand force by 0.4 N); 0.2 mm would be
-    // exceeded by another trial, seed or noise stream.
+    // Equivalence with lock step: until the first missed deadline or stall the trial
+    // over UDP is the lock-step trial of the same protocol and seed but for the wire's
+    // one tick of delay (the plant applies the command answering frame n at n + 1) and
+    // single late datagrams. Measured on a quiet machine over a whole reach without a
+    // missed deadline: max |Δy| 0.06 mm, median 5 µm (the commands differ by 1.5 N
+    // median, the hand force by 0.4 N); up to the plant's first stall on a loaded one
+    // (rows 97–640 of 3500 over six runs) 1–10 µm; 0.2 mm would be exceeded by another
+    // trial, seed or noise stream, and was by runs of 2–3 held ticks (0.23 mm).
     let lock_dir = tmp.path().join("lock");
     let lock = Command::new(BIN)
         .args([
@@ -191,7 +212,7 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
     eprintln!(
-        "before the first missed deadline (row {exact} of {rows}): max |y_udp - y_lock| = {dev:e} m"
+        "before the first missed deadline or stall (row {exact} of {rows}): max |y_udp - y_lock| = {dev:e} m"
     );
     assert!(
         dev < 2e-4,

@@ -157,6 +157,13 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
         report.ticks,
         report.watchdog_ticks
     );
+    for (id, tick) in &report.first_stall {
+        println!(
+            "trial {id}: first stall ({} or more ticks without a fresh command) at tick {tick} ({:.3} s)",
+            serve::STALL_TICKS,
+            *tick as f64 / TICK_HZ as f64
+        );
+    }
     if !report.cut_short.is_empty() {
         println!("cut short by the controller: trials {:?}", report.cut_short);
     }

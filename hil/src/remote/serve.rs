@@ -67,6 +67,14 @@ pub struct ServeReport {
     pub ticks: u64,
     /// Plant ticks at which the command watchdog had zeroed the force during a trial.
     pub watchdog_ticks: u64,
+    /// Per recorded trial that had one, `(trial id, trial tick)`: the first tick of the
+    /// trial's first stall, a run of at least [`STALL_TICKS`] ticks without a fresh
+    /// command after the trial's first, under which the plant held the previous one (late
+    /// datagrams, or a late wake-up of either end). Single late datagrams on a loaded
+    /// machine are common (on loopback, every few tens of milliseconds) and hold a command
+    /// for a tick; a stall holds one long enough to move the handle off the lock-step
+    /// trial.
+    pub first_stall: Vec<(u32, u64)>,
     /// Commands that named a trial the schedule does not have (ignored).
     pub unknown_trial_commands: u64,
     /// Per pressed e-stop: plant ticks from the press to the first tick whose newest
@@ -78,6 +86,13 @@ pub struct ServeReport {
     pub link: LinkCounters,
 }
 
+/// Consecutive ticks without a fresh command that make a stall (0.5 ms at 4 kHz). A
+/// single late datagram holds a command for one tick, a delay of two ticks instead of
+/// the wire's one for that command; two in a row is where, on a loaded machine's
+/// loopback, the trial was seen to leave its lock-step twin (0.23 mm with runs of 2–3
+/// held ticks, where runs of one stayed within 10 µm).
+pub const STALL_TICKS: u64 = 2;
+
 /// Ticks without a command after the last trial at which the server stops (0.1 s at
 /// 4 kHz: far more than a round trip, far less than a human notices).
 const LINGER_TICKS: u64 = 400;
@@ -88,6 +103,11 @@ struct Running {
     recorder: Recorder,
     tick: u64,
     estop_pressed_at: Option<u64>,
+    /// Whether a command has arrived in this trial, the ticks since the last fresh one,
+    /// and the first trial tick of the first stall.
+    commanded: bool,
+    held_run: u64,
+    first_stall: Option<u64>,
 }
 
 /// Serves the trials of `session` through `end` on `clock`, writing each trial's true
@@ -146,6 +166,7 @@ fn serve_loop<T: Transport, C: Clock>(
         cut_short: Vec::new(),
         ticks: 0,
         watchdog_ticks: 0,
+        first_stall: Vec::with_capacity(plans.len()),
         unknown_trial_commands: 0,
         estop_latency_ticks: Vec::new(),
         link: end.counters(),
@@ -165,6 +186,9 @@ fn serve_loop<T: Transport, C: Clock>(
         }
         let _ = tx.send((trial_meta(protocol, plan, None), rows));
         report.recorded.push(plan.index + 1);
+        if let Some(t) = r.first_stall {
+            report.first_stall.push((plan.index + 1, t));
+        }
         if r.tick < n_ticks {
             report.cut_short.push(plan.index + 1);
         }
@@ -177,12 +201,12 @@ fn serve_loop<T: Transport, C: Clock>(
             ran += 1;
             // 1. The trial the controller names, read from each fresh command (the held
             // one asks nothing new).
-            let asked = match end.poll_command(now)? {
+            let (asked, fresh) = match end.poll_command(now)? {
                 Some(c) => {
                     last_command_at = k;
-                    c.trial
+                    (c.trial, true)
                 }
-                None => 0,
+                None => (0, false),
             };
             if asked != 0 && asked != end.trial() {
                 match plans.iter().position(|p| p.index + 1 == u32::from(asked)) {
@@ -197,6 +221,9 @@ fn serve_loop<T: Transport, C: Clock>(
                             recorder: Recorder::new(div, n_ticks),
                             tick: 0,
                             estop_pressed_at: None,
+                            commanded: false,
+                            held_run: 0,
+                            first_stall: None,
                         });
                         done.remove(&plan.index);
                         end.set_trial(asked);
@@ -220,6 +247,15 @@ fn serve_loop<T: Transport, C: Clock>(
                 continue;
             };
             let t = Tick(r.tick);
+            if fresh {
+                r.commanded = true;
+                r.held_run = 0;
+            } else if r.commanded {
+                r.held_run += 1;
+                if r.held_run == STALL_TICKS && r.first_stall.is_none() {
+                    r.first_stall = Some(r.tick + 1 - STALL_TICKS);
+                }
+            }
             if options.estop_at_tick == Some(r.tick) {
                 r.sim.rig_mut().set_estop(true);
                 r.estop_pressed_at = Some(k);
