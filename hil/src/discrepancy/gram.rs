@@ -246,10 +246,6 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
 
-    /// Absorbing one intercept per group gives the coefficients and the residual sum
-    /// of squares of the fit that carries the two constants as columns (to 1e-9
-    /// relative: the two are the same normal equations, eliminated in a different
-    /// order).
     /// Eliminating trailing nuisance columns gives the kept coefficients and the residual
     /// sum of squares of the fit that carries them (to 1e-9 relative: the same normal
     /// equations, solved by blocks), and a reduced Gram per group adds up to the fit with
@@ -292,6 +288,10 @@ mod tests {
         assert!(r.xtx[0].abs() < 1e-12 && r.yty.abs() < 1e-12, "{r:?}");
     }
 
+    /// Absorbing one intercept per group gives the coefficients and the residual sum
+    /// of squares of the fit that carries the two constants as columns (to 1e-9
+    /// relative: the two are the same normal equations, eliminated in a different
+    /// order).
     #[test]
     fn absorbed_intercepts_equal_explicit_constants() {
         let rows: Vec<(usize, [f64; 2], f64)> = (0..200)

@@ -436,7 +436,7 @@ pub fn whitened_rows(
     w: &Whitening,
     f: &mut dyn FnMut(&[f64], f64, f64),
 ) {
-    weighted_rows(c, r, s, fb_delay_s, w, 0, f);
+    weighted_rows(c, r, s, fb_delay_s, w, false, f);
 }
 
 /// The nuisance columns every response carries in [`hand_grams`]: a constant force
@@ -447,18 +447,19 @@ pub fn whitened_rows(
 /// few millimetres from the references'. A slope per axis as well (a reach faster or
 /// slower than its references) lowered the baseline's floor further but took up part of
 /// an extra mass's response (measured in the README, "On sessions with a real rig's
-/// nuisances").
+/// nuisances"). They are carried as columns, not as [`super::gram::Intercepts`], because
+/// the weighting filters them in time and mixes them between the axes like every column.
 pub const RESPONSE_OFFSET_COLUMNS: usize = 2;
 
-/// [`whitened_rows`] with `offsets` nuisance columns (0 or [`RESPONSE_OFFSET_COLUMNS`],
-/// one constant per axis) after the candidate's, weighted like them.
+/// [`whitened_rows`], with the [`RESPONSE_OFFSET_COLUMNS`] (one constant per axis) after
+/// the candidate's columns when `offsets`, weighted like them.
 fn weighted_rows(
     c: &dyn HandCandidate,
     r: &HandResponse,
     s: usize,
     fb_delay_s: f64,
     w: &Whitening,
-    offsets: usize,
+    offsets: bool,
     f: &mut dyn FnMut(&[f64], f64, f64),
 ) {
     let phi = match r.rows.as_slice() {
@@ -468,16 +469,17 @@ fn weighted_rows(
         _ => 0.0,
     };
     // A row as one vector: regressors, the nuisance columns, then target and normaliser.
-    let cols = c.columns() + offsets;
+    let q = if offsets { RESPONSE_OFFSET_COLUMNS } else { 0 };
+    let cols = c.columns() + q;
     let mut prev = [vec![0.0; cols + 2], vec![0.0; cols + 2]];
     let mut cur = prev.clone();
     let mut out = vec![0.0; cols + 2];
-    let mut nuisance = vec![0.0; offsets];
+    let mut nuisance = vec![0.0; q];
     let mut k = 0usize;
     c.rows(r, s, fb_delay_s, &mut |x, y, n| {
         let (axis, sample) = (k % 2, k / 2);
         k += 1;
-        if offsets > 0 {
+        if offsets {
             nuisance.iter_mut().for_each(|v| *v = 0.0);
             nuisance[axis] = 1.0;
         }
@@ -510,7 +512,7 @@ pub fn hand_grams(
     (0..c.settings())
         .map(|s| {
             let mut g = Gram::new(c.columns() + q);
-            weighted_rows(c, r, s, fb_delay_s, w, q, &mut |x, y, n| g.push(x, y, n));
+            weighted_rows(c, r, s, fb_delay_s, w, true, &mut |x, y, n| g.push(x, y, n));
             g.eliminate_trailing(q)
         })
         .collect()
