@@ -15,7 +15,7 @@ use rigtwin::viz::{
 };
 
 mod common;
-use common::messages;
+use common::assert_reproducible;
 
 /// Every chunk of every store in an `.rrd` byte stream, in order.
 fn decode(bytes: &[u8]) -> Vec<(StoreKind, Chunk)> {
@@ -356,13 +356,6 @@ fn the_ellipse_drawn_has_the_axes_of_its_matrix() {
     let min = radii.iter().copied().fold(f64::MAX, f64::min);
     assert!((max - 400.0 * SCALE).abs() < 1e-6, "{max}");
     assert!((min - 100.0 * SCALE).abs() < 2e-6, "{min}");
-}
-
-/// rerun writes the footer's per-store manifests in `HashMap` order, so two saves may differ
-/// in the order (and, as seen once, the encoded length: 64 bytes in 56 MB) of those entries;
-/// the messages, which are everything a viewer shows, must be identical.
-fn assert_reproducible(a: &[u8], b: &[u8]) {
-    assert_eq!(messages(a), messages(b));
 }
 
 #[test]
