@@ -64,7 +64,8 @@ pub struct Hidden {
 ///
 /// - `rail-friction`: `Fc` 1–4 N, `b` 2–10 N s/m, smoothing 0.5–2 mm/s (linear-stage
 ///   rails with preloaded carriages).
-/// - `force-ripple`: amplitude 1–3 N, pitch 10–50 mm (iron-core linear motors).
+/// - `force-ripple`: amplitude 1–3 N per axis, pitch 10–50 mm (iron-core linear
+///   motors), each axis's phase uniform (its magnet track starts anywhere).
 /// - `actuation-delay`: 0.75–1.5 ms in whole ticks (drive/bus latency; much beyond
 ///   ~2 ms the project's stiff position loop is no longer stable).
 /// - `sensor-rotation`: ±10–25° (a sensor mounted one bolt hole off its index; a few
@@ -100,10 +101,15 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
         }
         "force-ripple" => {
             let r = ForceRipple {
-                amplitude_n: rng.random_range(1.0..3.0),
+                amplitude_n: [rng.random_range(1.0..3.0), rng.random_range(1.0..3.0)],
                 pitch_m: rng.random_range(0.01..0.05),
+                phase_rad: [
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                    rng.random_range(0.0..std::f64::consts::TAU),
+                ],
             };
-            p.insert("amplitude_n".into(), r.amplitude_n);
+            p.insert("amplitude_x_n".into(), r.amplitude_n[0]);
+            p.insert("amplitude_y_n".into(), r.amplitude_n[1]);
             p.insert("pitch_m".into(), r.pitch_m);
             effects.force_ripple = Some(r);
         }

@@ -239,16 +239,54 @@ pub struct RailFriction {
     pub smooth_velocity_m_per_s: f64,
 }
 
-/// Additive cogging of a linear motor: each axis gets
-/// `amplitude_n · sin(2π · x_cart / pitch_m)` on top of its command, whatever the
-/// command (cogging is a detent force of the magnets, present with the drive off).
+/// Additive cogging of a linear motor: axis `i` (0 = x, 1 = y) gets
+/// `amplitude_n[i] · sin(2π · q_i / pitch_m + phase_rad[i])` on top of its command at
+/// its cart's rail position `q_i`, whatever the command (cogging is a detent force of
+/// the magnets, present with the drive off). Each axis has its own magnet track, so its
+/// own amplitude and phase; the two motors share the magnet pitch.
+///
+/// In TOML, `amplitude_n` is one number for both axes or `[x, y]`; `phase_rad` is
+/// `[x, y]` and zero when absent (the magnets start at `q = 0`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ForceRipple {
-    /// Peak cogging force, N.
-    pub amplitude_n: f64,
+    /// Peak cogging force per axis, N.
+    #[serde(deserialize_with = "one_or_per_axis")]
+    pub amplitude_n: [f64; 2],
     /// Magnet pitch, m.
     pub pitch_m: f64,
+    /// Phase of the cogging per axis, rad.
+    #[serde(default)]
+    pub phase_rad: [f64; 2],
+}
+
+impl ForceRipple {
+    /// The same cogging on both axes, starting at `q = 0`.
+    #[must_use]
+    pub fn uniform(amplitude_n: f64, pitch_m: f64) -> Self {
+        ForceRipple {
+            amplitude_n: [amplitude_n; 2],
+            pitch_m,
+            phase_rad: [0.0; 2],
+        }
+    }
+}
+
+/// One number for both axes, or `[x, y]`.
+fn one_or_per_axis<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum OneOrTwo {
+        One(f64),
+        Two([f64; 2]),
+    }
+    match OneOrTwo::deserialize(d) {
+        Ok(OneOrTwo::One(v)) => Ok([v, v]),
+        Ok(OneOrTwo::Two(a)) => Ok(a),
+        Err(_) => Err(serde::de::Error::custom(
+            "expected one number (both axes) or two, [x, y]",
+        )),
+    }
 }
 
 /// Delay of the motor force behind its command, rounded to whole 250 µs ticks.
@@ -406,7 +444,10 @@ impl RigConfig {
             )?;
         }
         if let Some(r) = &e.force_ripple {
-            finite("effects.force_ripple.amplitude_n", r.amplitude_n)?;
+            for a in 0..2 {
+                finite("effects.force_ripple.amplitude_n", r.amplitude_n[a])?;
+                finite("effects.force_ripple.phase_rad", r.phase_rad[a])?;
+            }
             positive("effects.force_ripple.pitch_m", r.pitch_m)?;
         }
         if let Some(d) = &e.actuation_delay {

@@ -13,10 +13,11 @@ pub fn friction_force_n(f: &RailFriction, v_m_per_s: f64) -> f64 {
         + f.viscous_n_s_per_m * v_m_per_s)
 }
 
-/// Cogging force added to a motor whose cart is at `x_m`, N.
+/// Cogging force added to the motor of `axis` (0 = x, 1 = y) whose cart is at `q_m`
+/// on its rail, N.
 #[must_use]
-pub fn ripple_force_n(r: &ForceRipple, x_m: f64) -> f64 {
-    r.amplitude_n * (2.0 * PI * x_m / r.pitch_m).sin()
+pub fn ripple_force_n(r: &ForceRipple, axis: usize, q_m: f64) -> f64 {
+    r.amplitude_n[axis] * (2.0 * PI * q_m / r.pitch_m + r.phase_rad[axis]).sin()
 }
 
 /// A fixed-length delay line of motor commands, in whole ticks. Preallocated; `push`

@@ -64,7 +64,7 @@
 //! | key | law | changes |
 //! |---|---|---|
 //! | `rail_friction { coulomb_n, viscous_n_s_per_m, smooth_velocity_m_per_s }` | `F = −(F_c tanh(v/v_s) + b v)` on each cart by its own rail velocity at the start of the tick | cart motion |
-//! | `force_ripple { amplitude_n, pitch_m }` | additive cogging `A sin(2π x/pitch)` per axis by its cart's rail position, whatever the command | motor force |
+//! | `force_ripple { amplitude_n, pitch_m, phase_rad }` | additive cogging `A_i sin(2π q_i/pitch + φ_i)` on axis `i` by its cart's rail position `q_i`, whatever the command; amplitude and phase per axis (each motor its own magnet track), one pitch | motor force |
 //! | `actuation_delay { delay_ms }` | motor force = command of `round(delay/250 µs)` ticks earlier (zero before) | motor force timing |
 //! | `sensor { rotation_deg, offset_n, lowpass_hz }` | `raw = R(θ) · lowpass(F) + offset`; first-order lag, exact discretisation | the reading only |
 //! | `handle_mass { extra_mass_kg }` | mass added to the handle, between sensor and hand | inertia the sensor sees |

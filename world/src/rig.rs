@@ -427,8 +427,8 @@ impl SimRig {
             motor[a] = motor[a] * self.cfg.nuisance.motor_gain[a] + noise[a];
         }
         if let Some(r) = &self.cfg.effects.force_ripple {
-            motor[0] += ripple_force_n(r, lo_pos.x);
-            motor[1] += ripple_force_n(r, y_rel);
+            motor[0] += ripple_force_n(r, 0, lo_pos.x);
+            motor[1] += ripple_force_n(r, 1, y_rel);
         }
         let friction = match &self.cfg.effects.rail_friction {
             Some(f) => [

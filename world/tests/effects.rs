@@ -143,9 +143,12 @@ fn actuation_delay_shifts_the_force_by_exactly_n_ticks() {
 
 #[test]
 fn force_ripple_adds_cogging_by_cart_position() {
+    // Each axis its own amplitude and phase: a law that swapped the axes or dropped a
+    // phase would miss by up to 1.6 N on some tick.
     let r = ForceRipple {
-        amplitude_n: 0.8,
+        amplitude_n: [0.8, 0.5],
         pitch_m: 0.03,
+        phase_rad: [0.0, 2.0],
     };
     let mut cfg = bare();
     cfg.effects.force_ripple = Some(r);
@@ -160,7 +163,10 @@ fn force_ripple_adds_cogging_by_cart_position() {
         let cmd = push(k);
         for axis in 0..2 {
             let extra = m[axis] - cmd[axis];
-            assert!((extra - ripple_force_n(&r, x[axis])).abs() < 1e-12);
+            let law = r.amplitude_n[axis]
+                * (std::f64::consts::TAU * x[axis] / r.pitch_m + r.phase_rad[axis]).sin();
+            assert_eq!(ripple_force_n(&r, axis, x[axis]), law);
+            assert!((extra - law).abs() < 1e-12);
             max_ripple = max_ripple.max(extra.abs());
         }
     }

@@ -8,7 +8,7 @@
 //! | effect | material when |
 //! |---|---|
 //! | `rail-friction` | `|Fc| + |b| v_max ≥ 0.25 N` at the session's largest cart speed, with `Fc, b ≥ 0` |
-//! | `force-ripple` | amplitude `≥ 0.25 N` |
+//! | `force-ripple` | the larger of the two axes' amplitudes `≥ 0.25 N` |
 //! | `sensor-rotation` | `|sin θ| F_max ≥ 0.25 N` at the session's largest sensor force, and `|θ| ≥ 0.5°` |
 //! | `actuation-delay` | at least one 4 kHz tick (0.25 ms) beyond the nominal latency |
 //! | `handle-mass` | `m a_max ≥ 0.25 N` at the session's largest cart acceleration |
@@ -109,10 +109,10 @@ pub fn immaterial(
             }
         }
         "force-ripple" => {
-            let a = p(params, "amplitude_n");
-            if a < r {
+            let (ax, ay) = (p(params, "amplitude_x_n"), p(params, "amplitude_y_n"));
+            if !(ax.max(ay) >= r) {
                 why.push(format!(
-                    "immaterial: amplitude {a:.3} N, below the rig's {r} N"
+                    "immaterial: amplitudes x {ax:.3} N, y {ay:.3} N, both below the rig's {r} N"
                 ));
             }
         }

@@ -159,7 +159,9 @@ pub struct Cause {
     /// rotation is how far the reading is turned from the true force, counter-clockwise
     /// positive: `reading = R(angle) · F`, so the diagnosis applies `R(−angle)` to the
     /// reading (the world's `SensorEffect::rotation_deg` has the same sign; a sensor
-    /// frame yawed by `−angle` reads so).
+    /// frame yawed by `−angle` reads so). The meaning of every parameter whose sign,
+    /// frame or unit could be read two ways (ripple phases, the reflex's units) is
+    /// [`super::report::convention`]'s, which the table prints under each cause.
     pub parameters: BTreeMap<String, f64>,
     /// Their jackknife standard errors over the folds.
     pub parameter_se: BTreeMap<String, f64>,
@@ -534,8 +536,19 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     .iter()
                     .map(|f| c.parameters(f.setting, &f.beta, h.fb_delay_s))
                     .collect();
+                let with_units = |mut p: Vec<(String, f64)>| {
+                    // A reflex also in joint and endpoint units (from its gain).
+                    if c.name() == "stretch-reflex"
+                        && let Some(g) = p.iter().find(|(k, _)| k == "gain").map(|(_, g)| *g)
+                    {
+                        p.extend(h.reflex_units(g));
+                    }
+                    p
+                };
+                let fold_params: Vec<Vec<(String, f64)>> =
+                    fold_params.into_iter().map(with_units).collect();
                 let (parameters, parameter_se) = params_with_se(
-                    c.parameters(fit.setting, &fit.beta, h.fb_delay_s),
+                    with_units(c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
                     &fold_params,
                 );
                 let mut rejected = Vec::new();

@@ -824,6 +824,46 @@ pub struct HandJudgement {
     pub baseline: CvFit,
     /// The candidates' fits.
     pub fits: Vec<HandFit>,
+    /// The arm's geometry the balance used.
+    pub arm: HandArm,
+}
+
+impl HandJudgement {
+    /// A fitted stretch reflex of gain `gain_n_s_per_m` (N of activation per m/s of
+    /// muscle stretch velocity, the arm's own unit) in the units a lab compares with
+    /// the literature: the joint damping it adds, `g Aᵀ diag(w) A` (N m s/rad; shoulder
+    /// `ss`, cross `se`, elbow `ee`; `A` the moment arms, `w` the weights of
+    /// [`super::hand_signals::odd_part_weights`], ½ for a muscle without tone, which
+    /// answers only its stretch), and the endpoint damping `g S` (N s/m, rig axes) at
+    /// the pulse onsets, averaged over the responses. Both act after the reflex delay.
+    #[must_use]
+    pub fn reflex_units(&self, gain_n_s_per_m: f64) -> Vec<(String, f64)> {
+        let joint = self.arm.ata * gain_n_s_per_m;
+        let onsets: Vec<Matrix2<f64>> = self
+            .responses
+            .iter()
+            .filter_map(|r| r.s.get(r.onset).copied())
+            .collect();
+        let endpoint =
+            onsets.iter().sum::<Matrix2<f64>>() * (gain_n_s_per_m / onsets.len().max(1) as f64);
+        vec![
+            ("joint_damping_ss_n_m_s_per_rad".to_string(), joint[(0, 0)]),
+            ("joint_damping_se_n_m_s_per_rad".to_string(), joint[(0, 1)]),
+            ("joint_damping_ee_n_m_s_per_rad".to_string(), joint[(1, 1)]),
+            (
+                "endpoint_damping_xx_n_s_per_m".to_string(),
+                endpoint[(0, 0)],
+            ),
+            (
+                "endpoint_damping_xy_n_s_per_m".to_string(),
+                endpoint[(0, 1)],
+            ),
+            (
+                "endpoint_damping_yy_n_s_per_m".to_string(),
+                endpoint[(1, 1)],
+            ),
+        ]
+    }
 }
 
 /// The hand balance of a session: `Ok(Err(reason))` when the session cannot carry it.
@@ -923,6 +963,7 @@ pub fn judge_hand(
         whitening,
         baseline,
         fits,
+        arm,
     }))
 }
 

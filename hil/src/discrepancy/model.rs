@@ -72,10 +72,17 @@ fn add_effect(
             }
         }
         "force-ripple" => {
-            if let (Some(a), Some(p)) = (get(p, "amplitude_n"), get(p, "pitch_m")) {
+            if let (Some(ax), Some(ay), Some(pitch), Some(px), Some(py)) = (
+                get(p, "amplitude_x_n"),
+                get(p, "amplitude_y_n"),
+                get(p, "pitch_m"),
+                get(p, "phase_x_rad"),
+                get(p, "phase_y_rad"),
+            ) {
                 effects.force_ripple = Some(ForceRipple {
-                    amplitude_n: a,
-                    pitch_m: p,
+                    amplitude_n: [ax, ay],
+                    pitch_m: pitch,
+                    phase_rad: [px, py],
                 });
             }
         }
@@ -123,8 +130,7 @@ fn add_effect(
 }
 
 impl ExtendedModel {
-    /// The model a diagnosis names. A ripple's fitted phase has no key in the world's
-    /// law (which starts the magnets at `q = 0`) and is dropped.
+    /// The model a diagnosis names.
     #[must_use]
     pub fn from_diagnosis(d: &Diagnosis) -> ExtendedModel {
         let mut effects = PlantEffects::default();
@@ -180,5 +186,58 @@ impl ExtendedModel {
         };
         let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
         toml::from_str(&text).map_err(|e| err(e.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+
+    fn with_ripple(ripple: &str) -> String {
+        format!(
+            "fitted_to = \"s\"\ncause = \"force-ripple\"\ngain = 0.9\nmoving_mass_x_kg = 12.0\n\
+             moving_mass_y_kg = 5.0\n[effects.force_ripple]\n{ripple}\n"
+        )
+    }
+
+    fn read(text: &str) -> Result<ExtendedModel, DiscrepancyError> {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("model.toml");
+        std::fs::write(&path, text).unwrap();
+        ExtendedModel::read(&path)
+    }
+
+    /// A ripple is one amplitude for both axes (the form older model files and
+    /// protocols have, magnets at `q = 0`) or one per axis with its phases; a third form
+    /// is refused naming the file, the key and the forms accepted.
+    #[test]
+    fn ripple_amplitude_is_one_number_or_one_per_axis() {
+        let one = read(&with_ripple("amplitude_n = 1.5\npitch_m = 0.02")).unwrap();
+        assert_eq!(
+            one.effects.force_ripple,
+            Some(ForceRipple::uniform(1.5, 0.02))
+        );
+        let two = read(&with_ripple(
+            "amplitude_n = [1.5, 0.5]\npitch_m = 0.02\nphase_rad = [0.1, -2.0]",
+        ))
+        .unwrap();
+        let r = two.effects.force_ripple.unwrap();
+        assert_eq!(r.amplitude_n, [1.5, 0.5]);
+        assert_eq!(r.phase_rad, [0.1, -2.0]);
+        // What is written reads back the same.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.toml");
+        two.write(&path).unwrap();
+        assert_eq!(ExtendedModel::read(&path).unwrap(), two);
+
+        let err = read(&with_ripple(
+            "amplitude_n = [1.5, 0.5, 2.0]\npitch_m = 0.02",
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("model.toml"), "{err}");
+        assert!(err.contains("amplitude_n"), "{err}");
+        assert!(err.contains("[x, y]"), "{err}");
     }
 }

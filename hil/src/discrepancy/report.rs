@@ -167,6 +167,11 @@ pub fn table(d: &Diagnosis) -> String {
             fmt_params(&d.parameters, &d.parameter_se)
         );
     }
+    for c in &d.causes {
+        if let Some(text) = convention(&c.name) {
+            let _ = writeln!(out, "convention: {}: {text}", c.name);
+        }
+    }
     if let Some(t) = &d.threshold {
         let _ = writeln!(out, "rule: {}", t.rule);
     }
@@ -174,6 +179,32 @@ pub fn table(d: &Diagnosis) -> String {
         let _ = writeln!(out, "not judged: {:<16} {}", n.effect, n.reason);
     }
     out
+}
+
+/// What a named effect's parameters mean where a sign, a frame or a unit could be read
+/// two ways; printed under every cause that has one (`None` for the others).
+#[must_use]
+pub fn convention(name: &str) -> Option<&'static str> {
+    match name {
+        "sensor-rotation" => Some(
+            "angle_deg is how far the reading is turned from the true force, counter-clockwise \
+             positive: reading = R(angle_deg) · F, i.e. the sensor frame is yawed by −angle_deg; \
+             the correction is R(−angle_deg) applied to the reading (the world's \
+             sensor.rotation_deg has the same sign)",
+        ),
+        "force-ripple" => Some(
+            "the cogging amplitude_i · sin(2π q_i / pitch_m + phase_i_rad) is added to the motor \
+             force of axis i at its cart's rail position q_i (m, rig frame); each axis has its \
+             own magnet track, so its own amplitude and phase",
+        ),
+        "stretch-reflex" => Some(
+            "gain is the arm model's (N of muscle activation per m/s of muscle stretch velocity); \
+             joint_damping_* is the joint damping it adds after delay_ms (N m s/rad: shoulder ss, \
+             cross se, elbow ee), endpoint_damping_* the same at the hand at the pulse onsets \
+             (N s/m, rig axes)",
+        ),
+        _ => None,
+    }
 }
 
 /// The figure that shows the candidate `cf` at work.
