@@ -704,6 +704,18 @@ fn evidence(
             g("latency_ms"),
             cart
         ));
+        let tol = super::candidate::MOTOR_GAIN_TOLERANCE;
+        for axis in ["x", "y"] {
+            let gain = g(&format!("motor_force_gain_{axis}"));
+            if (gain - 1.0).abs() >= tol - 1e-9 {
+                ev.push(format!(
+                    "the nominal balance's motor force gain {axis} is at its bound ({gain:.3}, a force constant's ±{:.0} % tolerance): \
+                     on that axis the balance wants a force proportional to the command that no motor has, so an effect the \
+                     baseline lacks acts there",
+                    100.0 * tol
+                ));
+            }
+        }
     }
     if let (Some(h), Some(nrmse)) = (hand, d.hand_baseline_nrmse) {
         let p = |k: &str| d.hand_baseline.get(k).copied().unwrap_or(f64::NAN);

@@ -20,6 +20,10 @@ pub struct Gram {
     pub norm_sq: f64,
     /// Rows.
     pub n: usize,
+    /// Box bounds `(column, low, high)` on coefficients that [`Self::solve`] respects
+    /// (a property of the design, carried by every Gram of it: a sum takes them from
+    /// its parts).
+    pub bounds: Vec<(usize, f64, f64)>,
 }
 
 impl Gram {
@@ -33,7 +37,15 @@ impl Gram {
             yty: 0.0,
             norm_sq: 0.0,
             n: 0,
+            bounds: Vec::new(),
         }
+    }
+
+    /// The same Gram with box bounds `(column, low, high)` on coefficients.
+    #[must_use]
+    pub fn with_bounds(mut self, bounds: Vec<(usize, f64, f64)>) -> Gram {
+        self.bounds = bounds;
+        self
     }
 
     /// Adds one row: regressors `x` (length `p`), target `y`, normaliser `norm`.
@@ -55,8 +67,11 @@ impl Gram {
         self.n += 1;
     }
 
-    /// Adds the rows of `other` (same `p`).
+    /// Adds the rows of `other` (same `p`); an unbounded Gram takes `other`'s bounds.
     pub fn add(&mut self, other: &Gram) {
+        if self.bounds.is_empty() && !other.bounds.is_empty() {
+            self.bounds.clone_from(&other.bounds);
+        }
         for (a, b) in self.xtx.iter_mut().zip(&other.xtx) {
             *a += b;
         }
@@ -137,6 +152,7 @@ impl Gram {
         g.yty = (self.yty - (bn.transpose() * &inv * &bn)[(0, 0)]).max(0.0);
         g.norm_sq = self.norm_sq;
         g.n = self.n;
+        g.bounds = self.bounds.iter().copied().filter(|b| b.0 < k).collect();
         g
     }
 
@@ -150,12 +166,86 @@ impl Gram {
         g
     }
 
-    /// The least-squares coefficients, or `None` when `XᵀX` is singular. Columns are
-    /// scaled to unit diagonal before the Cholesky factorisation, so that regressors in
-    /// different units (m/s², N) do not spoil its conditioning.
+    /// The least-squares coefficients within [`Self::bounds`], or `None` when `XᵀX` is
+    /// singular. Columns are scaled to unit diagonal before the Cholesky factorisation,
+    /// so that regressors in different units (m/s², N) do not spoil its conditioning.
+    ///
+    /// When the unconstrained solution breaks a bound, every assignment of the bounded
+    /// coefficients to free, low or high is solved (`3^m` small solves for `m` bounded
+    /// columns; the design has two) and the feasible one of least squared error kept:
+    /// the exact solution of the box-constrained problem, which is convex. Within the
+    /// bounds the result is the unconstrained one, bit for bit.
     #[must_use]
     pub fn solve(&self) -> Option<Vec<f64>> {
+        let beta = self.solve_free(&[])?;
+        let inside = |b: &[f64]| {
+            self.bounds
+                .iter()
+                .all(|&(j, lo, hi)| b.get(j).is_none_or(|v| (lo..=hi).contains(v)))
+        };
+        if inside(&beta) {
+            return Some(beta);
+        }
+        let m = self.bounds.len();
+        let mut best: Option<(f64, Vec<f64>)> = None;
+        for code in 0..3usize.pow(u32::try_from(m).ok()?) {
+            let mut c = code;
+            let fixed: Vec<(usize, f64)> = self
+                .bounds
+                .iter()
+                .filter_map(|&(j, lo, hi)| {
+                    let which = c % 3;
+                    c /= 3;
+                    match which {
+                        1 => Some((j, lo)),
+                        2 => Some((j, hi)),
+                        _ => None,
+                    }
+                })
+                .collect();
+            let Some(b) = self.solve_free(&fixed) else {
+                continue;
+            };
+            if inside(&b) {
+                let sse = self.sse(&b);
+                if best.as_ref().is_none_or(|(s, _)| sse < *s) {
+                    best = Some((sse, b));
+                }
+            }
+        }
+        best.map(|(_, b)| b)
+    }
+
+    /// The least-squares coefficients with the columns of `fixed` held at the given
+    /// values (the others free).
+    fn solve_free(&self, fixed: &[(usize, f64)]) -> Option<Vec<f64>> {
         let p = self.p;
+        if !fixed.is_empty() {
+            let value = |j: usize| fixed.iter().find(|f| f.0 == j).map(|f| f.1);
+            let free: Vec<usize> = (0..p).filter(|j| value(*j).is_none()).collect();
+            let k = free.len();
+            // The target less the fixed columns' part, over the free columns.
+            let mut g = Gram::new(k);
+            for (a, &i) in free.iter().enumerate() {
+                for (b, &j) in free.iter().enumerate() {
+                    g.xtx[a * k + b] = self.xtx[i * p + j];
+                }
+                g.xty[a] = self.xty[i]
+                    - fixed
+                        .iter()
+                        .map(|&(j, c)| self.xtx[i * p + j] * c)
+                        .sum::<f64>();
+            }
+            let sub = g.solve_free(&[])?;
+            let mut beta = vec![0.0; p];
+            for (a, &i) in free.iter().enumerate() {
+                beta[i] = sub[a];
+            }
+            for &(j, c) in fixed {
+                beta[j] = c;
+            }
+            return Some(beta);
+        }
         let scale: Vec<f64> = (0..p)
             .map(|i| self.xtx[i * p + i])
             .map(|d| if d > 0.0 { 1.0 / d.sqrt() } else { 0.0 })
@@ -323,5 +413,52 @@ mod tests {
             (se - sf).abs() < 1e-9 * sf.max(1e-12) + 1e-12,
             "{se} vs {sf}"
         );
+    }
+
+    /// Box bounds: within them the solution is the unconstrained one, bit for bit;
+    /// outside, it is the box-constrained least-squares optimum, checked against a
+    /// brute-force grid over the two bounded coefficients (each with the free one
+    /// refitted): no feasible point of the grid has a smaller error (to 1e-9), and the
+    /// optimum sits on the bound the unconstrained fit broke.
+    #[test]
+    fn bounded_solve_is_the_constrained_optimum() {
+        // y = 3 a + 0.4 u + 0.05 w + a small ripple, with `u`, `w` bounded to ±0.1.
+        let mut g = Gram::new(3);
+        for i in 0..500 {
+            let t = i as f64 * 0.01;
+            let x = [
+                (1.3 * t).sin(),
+                (0.7 * t).cos() + 0.3 * (1.3 * t).sin(),
+                t.sin() * t.cos(),
+            ];
+            let y = 3.0 * x[0] + 0.4 * x[1] + 0.05 * x[2] + 0.01 * (17.0 * t).sin();
+            g.push(&x, y, 1.0);
+        }
+        let free = g.solve().unwrap();
+        assert!((free[1] - 0.4).abs() < 0.01, "{free:?}");
+        let wide = g.clone().with_bounds(vec![(1, -1.0, 1.0), (2, -1.0, 1.0)]);
+        assert_eq!(wide.solve().unwrap(), free);
+
+        let tight = g.clone().with_bounds(vec![(1, -0.1, 0.1), (2, -0.1, 0.1)]);
+        let b = tight.solve().unwrap();
+        assert!((b[1] - 0.1).abs() < 1e-12, "{b:?}");
+        assert!((-0.1..=0.1).contains(&b[2]), "{b:?}");
+        let best = tight.sse(&b);
+        // The grid: u, w on a 0.005 grid inside the box, `a` refitted for each.
+        let refit_a = |u: f64, w: f64| {
+            let r = g.xty[0] - g.xtx[1] * u - g.xtx[2] * w;
+            r / g.xtx[0]
+        };
+        for i in 0..=40 {
+            for j in 0..=40 {
+                let (u, w) = (-0.1 + 0.005 * f64::from(i), -0.1 + 0.005 * f64::from(j));
+                let e = g.sse(&[refit_a(u, w), u, w]);
+                assert!(e >= best * (1.0 - 1e-9), "({u}, {w}): {e} < {best}");
+            }
+        }
+        // A sum of bounded Grams keeps their bounds.
+        let mut sum = Gram::new(3);
+        sum.add(&tight);
+        assert_eq!(sum.bounds, tight.bounds);
     }
 }

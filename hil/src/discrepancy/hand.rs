@@ -33,7 +33,9 @@
 //! - `stretch-reflex`: `+ g S Δv_h(t − δ)`, δ on a 1 ms grid over 10–50 ms; the tension
 //!   law `m = a + K_m(e + τ_d ė)` passes an activation change to the tension with factor
 //!   1 (up to `K₁ e`, < 5 % at the arm's tracking errors), so `g` is directly the arm's
-//!   `StretchReflex::gain_n_s_per_m`.
+//!   `StretchReflex::gain_n_s_per_m`. It is also reported in the units a lab compares:
+//!   the joint damping `g Aᵀ diag(w) A` (N m s/rad) and the endpoint damping `g S`
+//!   (N s/m) at the pulse onsets ([`HandJudgement::reflex_units`]).
 //! - `grip-compliance`: the hand is held by a spring-damper, `F_hand = k (x_h − x) + b
 //!   (v_h − v)`: `Δx_h = Δx + ΔF_hand/(k + b s)` from the measured force, then the
 //!   baseline refitted, for `k` on a log grid and `b/k` on a small one.

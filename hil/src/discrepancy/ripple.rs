@@ -20,7 +20,7 @@
 
 use std::f64::consts::TAU;
 
-use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS};
+use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, gain_bounds};
 use super::error::DiscrepancyError;
 use super::gram::{Gram, Intercepts};
 use super::signals::BalanceSignals;
@@ -122,7 +122,7 @@ impl Candidate for ForceRipple {
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
         let nominal = Design::nominal(sig, latency_s);
         const P: usize = 2 + OWN + NUISANCE_COLUMNS;
-        let mut grams = vec![Gram::new(P); self.n];
+        let mut grams = vec![Gram::new(P).with_bounds(gain_bounds(P)); self.n];
         let mut offsets = vec![Intercepts::new(2, P); self.n];
         let mut x = [0.0; P];
         for axis in 0..2 {
@@ -183,32 +183,45 @@ mod tests {
     const PHASE_RAD: [f64; 2] = [2.0, -0.7];
 
     /// Carts of 12 and 4 kg integrated at 4 kHz (semi-implicit Euler, as the plant), each
-    /// commanded along a slow swing of ±5 (x) and ±8 cm (y), with the world's cogging law
-    /// added to the motor force but not to the logged command; logged at 1 kHz as 4-tick
-    /// block means with no hand force.
+    /// made to follow a slow swing over 10 (x) and 16 cm (y) by a position loop, with the world's cogging law
+    /// added to the motor force but not to the logged command, and a slow hand force;
+    /// logged at 1 kHz as 4-tick block means.
     fn cogged_trial() -> (TrialEntry, Trial) {
         let ticks = 24_000;
         let (mut x, mut v) = ([0.0; 2], [0.0; 2]);
-        let mut rows: Vec<[f64; 4]> = Vec::new();
-        let mut sum = [0.0; 4];
+        let mut rows: Vec<[f64; 6]> = Vec::new();
+        let mut sum = [0.0; 6];
         for k in 0..ticks {
             let t = k as f64 * TICK_S;
-            // The command that would carry the carts along `a sin(ω t)` if they were bare.
+            // A position loop (5 Hz, damping 0.7) along `a (1 − cos ω t)`, with its feed
+            // forward: the cogging moves the carts off the plan only by millimetres.
             let cmd: [f64; 2] = std::array::from_fn(|a| {
-                let (amp, w) = [(0.05, TAU / 3.0), (0.08, TAU / 2.0)][a];
-                -MASS_KG[a] * amp * w * w * (w * t).sin()
+                let (amp, w) = [(0.05, TAU / 3.0), (0.08, TAU / 4.0)][a];
+                let wn = TAU * 5.0;
+                let (xd, vd, ad) = (
+                    amp * (1.0 - (w * t).cos()),
+                    amp * w * (w * t).sin(),
+                    amp * w * w * (w * t).cos(),
+                );
+                MASS_KG[a] * (ad + wn * wn * (xd - x[a]) + 1.4 * wn * (vd - v[a]))
             });
-            let logged = [x[0], x[1], cmd[0], cmd[1]];
+            // A hand pushing on the handle: without it the force constant's column (the
+            // command itself) would balance the carts alone.
+            let hand = [
+                3.0 * (TAU * 0.7 * t + 0.4).sin(),
+                2.5 * (TAU * 1.3 * t).cos(),
+            ];
+            let logged = [x[0], x[1], hand[0], hand[1], cmd[0], cmd[1]];
             for (s, l) in sum.iter_mut().zip(logged) {
                 *s += l / 4.0;
             }
             if k % 4 == 3 {
                 rows.push(sum);
-                sum = [0.0; 4];
+                sum = [0.0; 6];
             }
             for a in 0..2 {
                 let cog = AMPLITUDE_N[a] * (TAU * x[a] / PITCH_M + PHASE_RAD[a]).sin();
-                v[a] += (cmd[a] + cog) / MASS_KG[a] * TICK_S;
+                v[a] += (cmd[a] + hand[a] + cog) / MASS_KG[a] * TICK_S;
                 x[a] += v[a] * TICK_S;
             }
         }
@@ -218,16 +231,16 @@ mod tests {
             t_s: (0..n).map(|i| i as f64 * 1e-3).collect(),
             x_m: col(0),
             y_m: col(1),
-            fx_n: vec![0.0; n],
-            fy_n: vec![0.0; n],
+            fx_n: col(2),
+            fy_n: col(3),
             pert_fx_n: vec![0.0; n],
             pert_fy_n: vec![0.0; n],
             vx_m_per_s: None,
             vy_m_per_s: None,
             ref_x_m: None,
             ref_y_m: None,
-            cmd_fx_n: Some(col(2)),
-            cmd_fy_n: Some(col(3)),
+            cmd_fx_n: Some(col(4)),
+            cmd_fy_n: Some(col(5)),
             extra: Vec::new(),
         };
         let entry = TrialEntry {
@@ -243,10 +256,14 @@ mod tests {
     }
 
     /// Two motors whose tracks start at different positions, with different amplitudes:
-    /// the best pitch of the grid is the true one within one grid step, and each axis's
-    /// amplitude (within 3 %) and phase (within 0.05 rad) come back at it, so the model
-    /// written from them is the law that made the data. A law with one amplitude and
-    /// phase shared by the axes could match at most one of them.
+    /// the best pitch of the grid is the true one within one grid step; at the true pitch
+    /// each axis's amplitude (within 2 %) and phase (within 0.02 rad) come back, at the
+    /// grid's best within 5 % and 0.1 rad, so the model written from them is the law that
+    /// made the data. Measured: at the true pitch 0.8 % and 1.0 % low (the balance filter
+    /// passes the 3–4 Hz ripple of these swings at about 99 % while the sinusoid columns
+    /// are not filtered), phases within 0.001 rad; at the grid's best (0.15 mm off) 1.6 %
+    /// and 2.4 % low, 0.05 and 0.08 rad. A law with one amplitude and phase shared by the
+    /// axes could match at most one of them.
     #[test]
     fn each_axis_has_its_own_amplitude_and_phase() {
         let (entry, trial) = cogged_trial();
@@ -271,18 +288,42 @@ mod tests {
             "pitch {} (step {step})",
             ripple.pitch_m(best)
         );
-        let p: std::collections::BTreeMap<String, f64> =
-            ripple.parameters(best, &beta, 0.0).into_iter().collect();
+        // On the grid the sinusoid drifts by up to half a step over the travel, which
+        // costs at most a few percent of amplitude and a tenth of a radian.
+        let at_true = ForceRipple {
+            k0_per_m: 1.0 / PITCH_M,
+            dk_per_m: 1.0,
+            n: 1,
+        };
+        let exact = at_true.grams(&sig, 0.0).unwrap()[0].solve().unwrap();
         for (axis, name) in ["x", "y"].iter().enumerate() {
-            let a = p[&format!("amplitude_{name}_n")];
-            let ph = p[&format!("phase_{name}_rad")];
-            assert!(
-                (a - AMPLITUDE_N[axis]).abs() < 0.03 * AMPLITUDE_N[axis],
-                "amplitude {name} {a}"
+            for (r, b, tol_a, tol_ph) in
+                [(&ripple, &beta, 0.05, 0.1), (&at_true, &exact, 0.01, 0.02)]
+            {
+                let s = if r.n == 1 { 0 } else { best };
+                let p: std::collections::BTreeMap<String, f64> =
+                    r.parameters(s, b, 0.0).into_iter().collect();
+                let a = p[&format!("amplitude_{name}_n")];
+                let ph = p[&format!("phase_{name}_rad")];
+                assert!(
+                    (a - AMPLITUDE_N[axis]).abs() < tol_a * AMPLITUDE_N[axis],
+                    "amplitude {name} {a} at pitch {}",
+                    r.pitch_m(s)
+                );
+                let dph = (ph - PHASE_RAD[axis] + std::f64::consts::PI).rem_euclid(TAU)
+                    - std::f64::consts::PI;
+                assert!(
+                    dph.abs() < tol_ph,
+                    "phase {name} {ph} at pitch {}",
+                    r.pitch_m(s)
+                );
+            }
+            let p: std::collections::BTreeMap<String, f64> =
+                ripple.parameters(best, &beta, 0.0).into_iter().collect();
+            let (a, ph) = (
+                p[&format!("amplitude_{name}_n")],
+                p[&format!("phase_{name}_rad")],
             );
-            let dph = (ph - PHASE_RAD[axis] + std::f64::consts::PI).rem_euclid(TAU)
-                - std::f64::consts::PI;
-            assert!(dph.abs() < 0.05, "phase {name} {ph}");
             // The law the plots and the evidence check use is the same force.
             let q = 0.013;
             let law = -ripple.effect_force(best, &beta, axis, q, 0.0).unwrap();

@@ -12,7 +12,7 @@
 //! sensor, an effect outside the catalog). Each angle's Gram is a quadratic form of one
 //! 5 × 5 Gram of `[a_x, a_y, u, F_own, F_other]` per trial.
 
-use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, push_rows};
+use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, gain_bounds, push_rows};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -101,7 +101,7 @@ impl Candidate for SensorRotation {
             .map(|s| {
                 let th = self.angle_deg(s).to_radians();
                 let w = [1.0, th.cos(), th.sin()];
-                let mut g = Gram::new(p);
+                let mut g = Gram::new(p).with_bounds(gain_bounds(p));
                 for (i, &ri) in regressors.iter().enumerate() {
                     for (j, &rj) in regressors.iter().enumerate() {
                         g.xtx[i * p + j] = at(ri, rj);
