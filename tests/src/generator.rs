@@ -194,6 +194,9 @@ pub struct Design {
     /// noise, reaches varying in time and place, impedance drifting): a lab's rig by
     /// default ([`NuisanceConfig::REALISTIC`]); `None` is the ideal rig.
     pub nuisance: Option<NuisanceConfig>,
+    /// The recording rate, Hz (a divisor of the 4 kHz control rate): 1000 on the
+    /// shared sessions; labs log at 500 Hz to 4 kHz.
+    pub rate_hz: u32,
 }
 
 impl Design {
@@ -205,6 +208,7 @@ impl Design {
         motor_noise: true,
         pulse: None,
         nuisance: Some(NuisanceConfig::REALISTIC),
+        rate_hz: 1000,
     };
 
     /// `repetitions` pulses per angle in a session of the shared proportion (a quarter
@@ -218,6 +222,7 @@ impl Design {
             motor_noise: true,
             pulse: None,
             nuisance: Some(NuisanceConfig::REALISTIC),
+            rate_hz: 1000,
         }
     }
 
@@ -302,7 +307,7 @@ pub fn generate_design(
     let hidden = draw(effect, &mut rng)
         .ok_or_else(|| format!("unknown effect {effect:?}; known: {EFFECTS:?}"))?;
     let mut protocol = Protocol::builtin("reach-perturb")?;
-    protocol.recording.rate_hz = 1000;
+    protocol.recording.rate_hz = design.rate_hz;
     // The pulses in random order among the reaches, all of them within the recorded
     // ones (the first 32 of the seed's 100-trial schedule hold only ~8 of the 24): the
     // hand balance needs the perturbed trials.

@@ -398,7 +398,7 @@ pub fn masses(beta: &[f64]) -> Vec<(String, f64)> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use std::f64::consts::TAU;
 
@@ -411,6 +411,39 @@ mod tests {
 
     const TICK_S: f64 = 2.5e-4;
     const MASS_KG: [f64; 2] = [12.0, 4.0];
+
+    /// A trial of 1 kHz rows `[x, y, fx, fy, cmd_fx, cmd_fy]` (m, N), reach kind, no
+    /// perturbation and no optional column but the command.
+    pub(in crate::discrepancy) fn logged_trial(rows: &[[f64; 6]]) -> (TrialEntry, Trial) {
+        let col = |c: usize| rows.iter().map(|r| r[c]).collect::<Vec<f64>>();
+        let n = rows.len();
+        let trial = Trial {
+            t_s: (0..n).map(|i| i as f64 * 1e-3).collect(),
+            x_m: col(0),
+            y_m: col(1),
+            fx_n: col(2),
+            fy_n: col(3),
+            pert_fx_n: vec![0.0; n],
+            pert_fy_n: vec![0.0; n],
+            vx_m_per_s: None,
+            vy_m_per_s: None,
+            ref_x_m: None,
+            ref_y_m: None,
+            cmd_fx_n: Some(col(4)),
+            cmd_fy_n: Some(col(5)),
+            extra: Vec::new(),
+        };
+        let entry = TrialEntry {
+            id: 1,
+            file: "trials/0001.csv".into(),
+            sha256: None,
+            kind: TrialKind::Reach,
+            start_m: None,
+            goal_m: None,
+            perturbation: None,
+        };
+        (entry, trial)
+    }
 
     /// Carts of 12 and 4 kg integrated at 4 kHz (semi-implicit Euler, as the plant),
     /// driven by a command updated at 2 kHz and held, applied `delay_ticks` later, plus
@@ -457,34 +490,7 @@ mod tests {
                 x[a] += v[a] * TICK_S;
             }
         }
-        let col = |c: usize| rows.iter().map(|r| r[c]).collect::<Vec<f64>>();
-        let n = rows.len();
-        let trial = Trial {
-            t_s: (0..n).map(|i| i as f64 * 1e-3).collect(),
-            x_m: col(0),
-            y_m: col(1),
-            fx_n: col(2),
-            fy_n: col(3),
-            pert_fx_n: vec![0.0; n],
-            pert_fy_n: vec![0.0; n],
-            vx_m_per_s: None,
-            vy_m_per_s: None,
-            ref_x_m: None,
-            ref_y_m: None,
-            cmd_fx_n: Some(col(4)),
-            cmd_fy_n: Some(col(5)),
-            extra: Vec::new(),
-        };
-        let entry = TrialEntry {
-            id: 1,
-            file: "trials/0001.csv".into(),
-            sha256: None,
-            kind: TrialKind::Reach,
-            start_m: None,
-            goal_m: None,
-            perturbation: None,
-        };
-        (entry, trial)
+        logged_trial(&rows)
     }
 
     fn nrmse(d: &Design, sig: &BalanceSignals) -> (f64, Vec<f64>) {

@@ -110,7 +110,7 @@ pub fn immaterial(
         }
         "force-ripple" => {
             let (ax, ay) = (p(params, "amplitude_x_n"), p(params, "amplitude_y_n"));
-            if !(ax.max(ay) >= r) {
+            if ax.max(ay).is_nan() || ax.max(ay) < r {
                 why.push(format!(
                     "immaterial: amplitudes x {ax:.3} N, y {ay:.3} N, both below the rig's {r} N"
                 ));

@@ -835,7 +835,7 @@ impl HandJudgement {
     /// muscle stretch velocity, the arm's own unit) in the units a lab compares with
     /// the literature: the joint damping it adds, `g Aᵀ diag(w) A` (N m s/rad; shoulder
     /// `ss`, cross `se`, elbow `ee`; `A` the moment arms, `w` the weights of
-    /// [`super::hand_signals::odd_part_weights`], ½ for a muscle without tone, which
+    /// `hand_signals::odd_part_weights`, ½ for a muscle without tone, which
     /// answers only its stretch), and the endpoint damping `g S` (N s/m, rig axes) at
     /// the pulse onsets, averaged over the responses. Both act after the reflex delay.
     #[must_use]

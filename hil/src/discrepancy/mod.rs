@@ -43,8 +43,8 @@ mod subject_fit;
 
 pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
 pub use candidate::{
-    Baseline, Candidate, NUISANCE_COLUMNS, force_gains, masses, nominal_target, push_rows,
-    residual_rows,
+    Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, force_gains, gain_bounds, masses,
+    nominal_target, push_rows, residual_rows,
 };
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
@@ -68,7 +68,7 @@ pub use replay::{
     CHANNELS, ChannelError, CompareOptions, Comparison, ImpedanceComparison, RESPONSE_WINDOW_S,
     Timing, compare,
 };
-pub use report::{table, write_report};
+pub use report::{convention, table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;
 pub use signals::{

@@ -174,7 +174,8 @@ impl Candidate for ForceRipple {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use crate::session::{Trial, TrialEntry, TrialKind};
+    use crate::discrepancy::candidate::tests::logged_trial;
+    use crate::session::{Trial, TrialEntry};
 
     const TICK_S: f64 = 2.5e-4;
     const MASS_KG: [f64; 2] = [12.0, 4.0];
@@ -225,34 +226,7 @@ mod tests {
                 x[a] += v[a] * TICK_S;
             }
         }
-        let col = |c: usize| rows.iter().map(|r| r[c]).collect::<Vec<f64>>();
-        let n = rows.len();
-        let trial = Trial {
-            t_s: (0..n).map(|i| i as f64 * 1e-3).collect(),
-            x_m: col(0),
-            y_m: col(1),
-            fx_n: col(2),
-            fy_n: col(3),
-            pert_fx_n: vec![0.0; n],
-            pert_fy_n: vec![0.0; n],
-            vx_m_per_s: None,
-            vy_m_per_s: None,
-            ref_x_m: None,
-            ref_y_m: None,
-            cmd_fx_n: Some(col(4)),
-            cmd_fy_n: Some(col(5)),
-            extra: Vec::new(),
-        };
-        let entry = TrialEntry {
-            id: 1,
-            file: "trials/0001.csv".into(),
-            sha256: None,
-            kind: TrialKind::Reach,
-            start_m: None,
-            goal_m: None,
-            perturbation: None,
-        };
-        (entry, trial)
+        logged_trial(&rows)
     }
 
     /// Two motors whose tracks start at different positions, with different amplitudes:
