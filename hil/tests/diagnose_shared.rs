@@ -104,3 +104,33 @@ fn example_rotation_mass_names_both_effects_with_their_sizes() {
     let mass = by("handle-mass").parameters["extra_mass_kg"];
     assert!((mass - 0.781).abs() < 0.2 * 0.781, "mass {mass}");
 }
+
+/// A rig that does not log the optional motor-command columns: the four plant-side
+/// effects are listed as not judged, each with the reason naming the columns, and the
+/// hand balance, which needs only the sensor, the positions and the pulses, still finds
+/// what it sees: `example-rotation-mass`'s extra handle mass, within 20 % of the
+/// disclosed 0.781 kg, and nothing else. (The materiality checks read the session's
+/// largest acceleration and force from every trial: from the trials with a command
+/// alone, none here, they judged the mass "0.000 N at 0.00 m/s²" and named nothing.)
+#[test]
+fn without_the_command_the_plant_side_is_not_judged_and_the_hand_side_still_is() {
+    let Some(dir) = shared("example-rotation-mass") else {
+        return;
+    };
+    let mut s = Session::read(&dir).unwrap();
+    for t in &mut s.trials {
+        t.cmd_fx_n = None;
+        t.cmd_fy_n = None;
+    }
+    let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+    let not: Vec<&str> = d.not_judged.iter().map(|n| n.effect.as_str()).collect();
+    assert_eq!(not, rigtwin::discrepancy::PLANT_SIDE);
+    for n in &d.not_judged {
+        assert!(n.reason.contains("cmd_fx_n"), "{}", n.reason);
+    }
+    assert_eq!(d.trials_used, 0);
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["handle-mass"]);
+    let mass = d.causes[0].parameters["extra_mass_kg"];
+    assert!((mass - 0.781).abs() < 0.2 * 0.781, "mass {mass}");
+}

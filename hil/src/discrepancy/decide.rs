@@ -32,6 +32,7 @@
 use super::candidate::Candidate;
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
+use crate::session::Session;
 
 /// The force a lab's rig resolves over a session, N: the realistic force-sensor noise
 /// is 0.05–0.15 N RMS per sample and the tare error up to 0.3 N
@@ -74,6 +75,31 @@ impl SessionScale {
             a_max: max(&|s, a| &s.a[a]),
             f_max: max(&|s, a| &s.f[a]),
         }
+    }
+}
+
+impl SessionScale {
+    /// [`Self::of`] over every trial of `session`, those without the motor command
+    /// included: their positions and forces are smoothed as the balance smooths them,
+    /// with a zero command standing in (the scale reads no command).
+    ///
+    /// # Errors
+    /// A trial that cannot be smoothed.
+    pub fn of_session(session: &Session) -> Result<SessionScale, DiscrepancyError> {
+        let rate = session.manifest.rate_hz;
+        let mut signals = Vec::with_capacity(session.trials.len());
+        for (entry, trial) in session.iter() {
+            let sig = if trial.cmd_fx_n.is_some() && trial.cmd_fy_n.is_some() {
+                BalanceSignals::from_trial(entry, trial, rate)?
+            } else {
+                let mut t = trial.clone();
+                t.cmd_fx_n = Some(vec![0.0; trial.len()]);
+                t.cmd_fy_n = Some(vec![0.0; trial.len()]);
+                BalanceSignals::from_trial(entry, &t, rate)?
+            };
+            signals.extend(sig);
+        }
+        Ok(SessionScale::of(&signals))
     }
 }
 
