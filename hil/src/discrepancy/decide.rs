@@ -76,30 +76,34 @@ impl SessionScale {
             f_max: max(&|s, a| &s.f[a]),
         }
     }
-}
 
-impl SessionScale {
-    /// [`Self::of`] over every trial of `session`, those without the motor command
-    /// included: their positions and forces are smoothed as the balance smooths them,
-    /// with a zero command standing in (the scale reads no command).
+    /// The scale of the whole session: [`Self::of`] the `signals` the cart balance
+    /// uses, and of the trials it skips for want of the motor command (the hand balance
+    /// judges them too), whose positions and forces are smoothed here as the balance
+    /// smooths them, with a zero command standing in (the scale reads no command).
     ///
     /// # Errors
     /// A trial that cannot be smoothed.
-    pub fn of_session(session: &Session) -> Result<SessionScale, DiscrepancyError> {
+    pub fn of_session(
+        session: &Session,
+        signals: &[BalanceSignals],
+    ) -> Result<SessionScale, DiscrepancyError> {
         let rate = session.manifest.rate_hz;
-        let mut signals = Vec::with_capacity(session.trials.len());
+        let mut skipped = Vec::new();
         for (entry, trial) in session.iter() {
-            let sig = if trial.cmd_fx_n.is_some() && trial.cmd_fy_n.is_some() {
-                BalanceSignals::from_trial(entry, trial, rate)?
-            } else {
+            if trial.cmd_fx_n.is_none() || trial.cmd_fy_n.is_none() {
                 let mut t = trial.clone();
                 t.cmd_fx_n = Some(vec![0.0; trial.len()]);
                 t.cmd_fy_n = Some(vec![0.0; trial.len()]);
-                BalanceSignals::from_trial(entry, &t, rate)?
-            };
-            signals.extend(sig);
+                skipped.extend(BalanceSignals::from_trial(entry, &t, rate)?);
+            }
         }
-        Ok(SessionScale::of(&signals))
+        let (a, b) = (SessionScale::of(signals), SessionScale::of(&skipped));
+        Ok(SessionScale {
+            v_max: a.v_max.max(b.v_max),
+            a_max: a.a_max.max(b.a_max),
+            f_max: a.f_max.max(b.f_max),
+        })
     }
 }
 

@@ -371,14 +371,8 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         + if hand.is_ok() { HUMAN_SIDE.len() } else { 0 };
     let alpha_each = opts.alpha / judged.max(1) as f64;
 
-    // What bounds the session's forces and motions, for both balances' checks: over
-    // every trial, those without the motor command included (the hand balance judges
-    // them too).
-    let scale = if signals.len() == session.trials.len() {
-        SessionScale::of(&signals)
-    } else {
-        SessionScale::of_session(session)?
-    };
+    // What bounds the session's forces and motions, for both balances' checks.
+    let scale = SessionScale::of_session(session, &signals)?;
 
     // ---- the cart balance (plant side) ----
     let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
