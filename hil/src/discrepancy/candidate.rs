@@ -64,6 +64,31 @@ pub trait Candidate: Designed + Sync + Send {
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
         design_grams(self, self.settings(), sig, latency_s)
     }
+    /// What the candidate changes in the nominal balance besides adding regressors.
+    fn reshapes(&self) -> Reshape {
+        Reshape::Nothing
+    }
+    /// One trial's Gram for every setting, joined to `base` (effects already named,
+    /// each at its setting: [`Design::joined`]), for forward selection. The default
+    /// joins each setting's [`Design`]; ripple and rotation run their fast paths with
+    /// `base`'s regressors carried along.
+    ///
+    /// # Errors
+    /// A signal-processing error while smoothing a regressor.
+    fn grams_given(
+        &self,
+        sig: &BalanceSignals,
+        latency_s: f64,
+        base: &Design,
+    ) -> Result<Vec<Gram>, DiscrepancyError> {
+        (0..self.settings())
+            .map(|s| {
+                Ok(base
+                    .joined(&self.design(sig, s, latency_s)?, self.reshapes())
+                    .gram(sig))
+            })
+            .collect()
+    }
     /// The catalog parameters (name with unit, value) from setting `s` and the fitted
     /// coefficients `beta` (masses first).
     fn parameters(&self, s: usize, beta: &[f64], latency_s: f64) -> Vec<(String, f64)>;
@@ -88,6 +113,20 @@ pub trait Candidate: Designed + Sync + Send {
     ) -> Result<[Vec<f64>; 2], DiscrepancyError> {
         Ok(self.design(sig, s, latency_s)?.residual(sig, beta))
     }
+}
+
+/// What a candidate changes in the nominal balance `u(t − latency) + F = m a + …`
+/// besides its own regressors: the command's timing (a delay) or the sensor force's
+/// frame (a rotation). The catalog has one candidate of each, so two joined designs
+/// never reshape the same part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reshape {
+    /// Own regressors only (friction, ripple).
+    Nothing,
+    /// The command as it enters the balance (`u(t − τ)`).
+    Command,
+    /// The sensor force as it enters the balance (`R(−θ) F`).
+    Force,
 }
 
 /// Columns of the nominal balance's nuisances that every design carries after the
@@ -256,6 +295,46 @@ impl Design {
 
     fn columns(&self) -> usize {
         2 + self.own[0].len() + NUISANCE_COLUMNS
+    }
+
+    /// This design (the effects already named) joined with `other`, a candidate's
+    /// design at one setting that reshapes `reshape`: the command from `other` if it
+    /// reshapes the command, else from `self`; the sensor force's part (`target − gain`)
+    /// from `other` if it reshapes the force, else from `self`; own regressors `self`'s
+    /// then `other`'s.
+    #[must_use]
+    pub fn joined(&self, other: &Design, reshape: Reshape) -> Design {
+        let gain = if reshape == Reshape::Command {
+            other.gain.clone()
+        } else {
+            self.gain.clone()
+        };
+        let force_from = if reshape == Reshape::Force {
+            other
+        } else {
+            self
+        };
+        let target = [0, 1].map(|axis| {
+            gain[axis]
+                .iter()
+                .zip(&force_from.target[axis])
+                .zip(&force_from.gain[axis])
+                .map(|((u, t), g)| u + (t - g))
+                .collect()
+        });
+        let own = [0, 1].map(|axis| {
+            self.own[axis]
+                .iter()
+                .chain(&other.own[axis])
+                .cloned()
+                .collect()
+        });
+        Design {
+            target,
+            norm: self.norm.clone(),
+            own,
+            gain,
+        }
     }
 
     fn own_row(&self, axis: usize, r: usize, x: &mut [f64]) {
@@ -537,7 +616,7 @@ pub(super) mod tests {
         assert!(e_old > 100.0 * e_true, "former {e_old} vs now {e_true}");
     }
 
-    fn assert_same_gram(a: &Gram, b: &Gram) {
+    pub(in crate::discrepancy) fn assert_same_gram(a: &Gram, b: &Gram) {
         let close = |x: f64, y: f64, what: &str| {
             assert!(
                 (x - y).abs() <= 1e-9 * (1.0 + x.abs().max(y.abs())),

@@ -14,7 +14,7 @@
 //! filter passes little above ~30 Hz, where linear interpolation at 1 kHz is exact to
 //! 0.1 %.
 
-use super::candidate::{Candidate, Design, Designed};
+use super::candidate::{Candidate, Design, Designed, Reshape};
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
 
@@ -85,6 +85,9 @@ impl Candidate for ActuationDelay {
     }
     fn columns(&self) -> usize {
         2
+    }
+    fn reshapes(&self) -> Reshape {
+        Reshape::Command
     }
     fn parameters(&self, s: usize, _beta: &[f64], _latency_s: f64) -> Vec<(String, f64)> {
         vec![("delay_ms".to_string(), self.lag_s(s) * 1e3)]

@@ -32,6 +32,7 @@
 //! averages.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use rayon::prelude::*;
 use serde::Serialize;
@@ -44,6 +45,7 @@ use super::error::DiscrepancyError;
 use super::friction::RailFriction;
 use super::gram::Gram;
 use super::hand::{HandJudgement, ReplicateTest, baseline_parameters, judge_hand};
+use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
@@ -114,6 +116,10 @@ pub struct Ranked {
     pub parameters: BTreeMap<String, f64>,
     /// Jackknife standard error of each parameter over the folds.
     pub parameter_se: BTreeMap<String, f64>,
+    /// The effects already named that this candidate was fitted jointly with and judged
+    /// against (forward selection, [`Diagnosis::conditional`]); empty in the first round.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub given: Vec<String>,
 }
 
 /// The decision rule with its numbers.
@@ -165,6 +171,10 @@ pub struct Cause {
     pub parameters: BTreeMap<String, f64>,
     /// Their jackknife standard errors over the folds.
     pub parameter_se: BTreeMap<String, f64>,
+    /// The causes named before it on the same balance: its gain is measured against a
+    /// model that has them, and its parameters (and theirs) come from one joint fit.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub given: Vec<String>,
 }
 
 /// The outcome of [`diagnose`], as `rigtwin diagnose --json` prints it.
@@ -182,9 +192,11 @@ pub struct Diagnosis {
     pub folds: usize,
     /// Catalog name of the strongest cause (the first of [`Self::causes`]), or `none`.
     pub cause: String,
-    /// Every named cause, strongest held-out gain first: the best candidate of each
-    /// balance that passes every test (the cart balance and the hand balance see
-    /// different effects, so one of each can be named at once).
+    /// Every named cause: on the cart balance by forward selection (the best passing
+    /// candidate, then the best passing one given it, and so on, with joint
+    /// parameters), on the hand balance the best passing candidate; the first cause of
+    /// each balance ordered by held-out gain, each balance's later causes after its
+    /// first.
     pub causes: Vec<Cause>,
     /// The cause's parameters (units in the names); empty for `none`.
     pub parameters: BTreeMap<String, f64>,
@@ -228,6 +240,10 @@ pub struct Diagnosis {
     pub hand_baseline: BTreeMap<String, f64>,
     /// Every judged candidate, best held-out gain first.
     pub ranking: Vec<Ranked>,
+    /// The cart balance's later rounds of forward selection: every candidate not yet
+    /// named, fitted jointly with the causes named so far ([`Ranked::given`]) and judged
+    /// against them alone, round by round, best gain first within a round.
+    pub conditional: Vec<Ranked>,
     /// The best candidate after the cause (or the best one when the cause is `none`).
     pub runner_up: Option<String>,
     /// The decision rule.
@@ -241,7 +257,7 @@ pub struct Diagnosis {
 /// A candidate with its cross-validated fit, kept for plots and reports.
 pub struct CandidateFit {
     /// The candidate.
-    pub candidate: Box<dyn Candidate>,
+    pub candidate: Arc<dyn Candidate>,
     /// Its fit.
     pub fit: CvFit,
 }
@@ -320,6 +336,186 @@ fn params_with_se(
     (parameters, se)
 }
 
+impl Cause {
+    fn of(r: &Ranked) -> Cause {
+        Cause {
+            name: r.name.clone(),
+            balance: r.balance.clone(),
+            gain: r.gain,
+            parameters: r.parameters.clone(),
+            parameter_se: r.parameter_se.clone(),
+            given: r.given.clone(),
+        }
+    }
+}
+
+/// How a cart-balance candidate is judged: against `base` (the nominal balance, or the
+/// effects named so far), by the fold t-test, the material floor on the gain and the
+/// physical checks of [`super::decide`].
+#[derive(Clone, Copy)]
+struct Judge<'a> {
+    base: &'a CvFit,
+    base_nrmse: f64,
+    t_critical: f64,
+    min_gain: f64,
+    scale: &'a SessionScale,
+    signals: &'a [BalanceSignals],
+    latency_s: f64,
+}
+
+impl Judge<'_> {
+    /// The candidate's row of the ranking: statistics, parameters, and the physical
+    /// checks (the evidence check only for candidates that pass the statistical ones:
+    /// it re-forms every trial's residual).
+    fn rank(
+        &self,
+        c: &dyn Candidate,
+        fit: &CvFit,
+        given: &[String],
+    ) -> Result<Ranked, DiscrepancyError> {
+        let lat = self.latency_s;
+        let (nrmse, gain, fold_gains, t) = fold_stats(fit, self.base, self.base_nrmse);
+        let fold_params: Vec<Vec<(String, f64)>> = fit
+            .folds
+            .iter()
+            .map(|f| c.parameters(f.setting, &f.beta, lat))
+            .collect();
+        let (parameters, parameter_se) =
+            params_with_se(c.parameters(fit.setting, &fit.beta, lat), &fold_params);
+        let s = fit.setting;
+        let mut rejected = immaterial(c.name(), &parameters, self.scale, lat * 1e3);
+        rejected.extend(at_edge(c.name(), c.setting(s), s, c.settings()));
+        let mut significant = t > self.t_critical && gain >= self.min_gain;
+        let mut r2 = None;
+        if significant {
+            r2 = evidence_r2(c, s, &fit.beta, self.signals, lat)?;
+            if let Some(r2) = r2.filter(|r2| *r2 < MIN_EVIDENCE_R2) {
+                rejected.push(format!(
+                    "its evidence does not follow its law: the fitted law explains {:.0} % of the binned partial residual (at least {:.0} % needed)",
+                    100.0 * r2,
+                    100.0 * MIN_EVIDENCE_R2
+                ));
+            }
+        }
+        significant &= rejected.is_empty();
+        Ok(Ranked {
+            name: c.name().to_string(),
+            balance: "cart".into(),
+            gain,
+            extended_nrmse: nrmse,
+            fold_gains,
+            t_statistic: t,
+            significant,
+            rejected,
+            evidence_r2: r2,
+            parameters,
+            parameter_se,
+            given: given.to_vec(),
+        })
+    }
+}
+
+/// Forward selection on the cart balance: the best passing candidate of `ranked` is
+/// named; every other one is then fitted jointly with the named ones ([`Joint`]; the
+/// named ones' settings refined given it, [`refine`]) and judged against the named
+/// ones alone by the same rules; the best that passes is named, and so on until none
+/// passes. Returns the causes in the order named, each with its parameters from the
+/// last joint fit, and every later round's rows.
+fn forward_select(
+    ranked: &[(Ranked, CandidateFit)],
+    judge: &Judge<'_>,
+    folds: &Folds,
+) -> Result<(Vec<Cause>, Vec<Ranked>), DiscrepancyError> {
+    let Some((first, cf)) = ranked.iter().find(|(r, _)| r.significant) else {
+        return Ok((Vec::new(), Vec::new()));
+    };
+    let lat = judge.latency_s;
+    let mut causes = vec![Cause::of(first)];
+    let mut chosen: Vec<Member> = vec![(cf.candidate.clone(), cf.fit.setting)];
+    let mut conditional = Vec::new();
+    loop {
+        let rest: Vec<Arc<dyn Candidate>> = ranked
+            .iter()
+            .map(|(_, cf)| cf.candidate.clone())
+            .filter(|c| chosen.iter().all(|(n, _)| n.name() != c.name()))
+            .collect();
+        if rest.is_empty() {
+            break;
+        }
+        let given: Vec<String> = chosen.iter().map(|(c, _)| c.name().to_string()).collect();
+        let base = cross_validate(
+            &grams_of(&Joint::given(chosen.clone()), judge.signals, lat)?,
+            folds,
+            "the named effects",
+        )?;
+        let cond = Judge {
+            base: &base,
+            base_nrmse: base.nrmse(),
+            ..*judge
+        };
+        let mut round: Vec<(Ranked, Joint, CvFit)> = rest
+            .into_par_iter()
+            .map(|c| {
+                let joint = Joint {
+                    fixed: chosen.clone(),
+                    next: c.clone(),
+                };
+                let fit = cross_validate(&grams_of(&joint, judge.signals, lat)?, folds, c.name())?;
+                let mut members = chosen.clone();
+                members.push((c.clone(), fit.setting));
+                let refined = refine(&members, judge.signals, lat)?;
+                let (joint, fit) = if refined.iter().zip(&members).all(|(a, b)| a.1 == b.1) {
+                    (joint, fit)
+                } else {
+                    let joint = Joint {
+                        fixed: refined[..chosen.len()].to_vec(),
+                        next: c.clone(),
+                    };
+                    let fit =
+                        cross_validate(&grams_of(&joint, judge.signals, lat)?, folds, c.name())?;
+                    (joint, fit)
+                };
+                Ok((cond.rank(&joint, &fit, &given)?, joint, fit))
+            })
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+        round.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        let winner = round.iter().find(|(r, _, _)| r.significant).cloned();
+        conditional.extend(round.into_iter().map(|(r, _, _)| r));
+        let Some((r, joint, fit)) = winner else {
+            break;
+        };
+        // Every named member's parameters from the joint fit.
+        let per_fold: Vec<Vec<MemberParameters>> = fit
+            .folds
+            .iter()
+            .map(|f| joint.member_parameters(f.setting, &f.beta, lat))
+            .collect();
+        let members = joint.member_parameters(fit.setting, &fit.beta, lat);
+        for (i, (cause, (_, params))) in causes.iter_mut().zip(members).enumerate() {
+            let fp: Vec<Vec<(String, f64)>> = per_fold.iter().map(|m| m[i].1.clone()).collect();
+            (cause.parameters, cause.parameter_se) = params_with_se(params, &fp);
+        }
+        causes.push(Cause::of(&r));
+        chosen = joint.fixed.clone();
+        chosen.push((joint.next.clone(), fit.setting));
+    }
+    Ok((causes, conditional))
+}
+
+/// The session with every trial's sensor force turned back into the rig frame from a
+/// sensor rotated by `angle_deg` (the reading is `R(θ) F`, so `F = R(−θ) reading`; the
+/// perturbation columns are the rig's command and stay).
+fn turned_back(session: &Session, angle_deg: f64) -> Session {
+    let (sn, cs) = angle_deg.to_radians().sin_cos();
+    let mut s = session.clone();
+    for t in &mut s.trials {
+        for (fx, fy) in t.fx_n.iter_mut().zip(t.fy_n.iter_mut()) {
+            (*fx, *fy) = (cs * *fx + sn * *fy, cs * *fy - sn * *fx);
+        }
+    }
+    s
+}
+
 /// Diagnoses a session: see the module docs.
 ///
 /// # Errors
@@ -335,7 +531,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         .into_iter()
         .flatten()
         .collect();
-    let hand = judge_hand(session, opts.folds)?;
+    let mut hand = judge_hand(session, opts.folds)?;
     let mut not_judged: Vec<NotJudged> = Vec::new();
     let mut d = Diagnosis {
         session: session.dir.display().to_string(),
@@ -360,6 +556,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_weighting: BTreeMap::new(),
         hand_weighting_source: None,
         ranking: Vec::new(),
+        conditional: Vec::new(),
         runner_up: None,
         threshold: None,
         not_judged: Vec::new(),
@@ -376,6 +573,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
 
     // ---- the cart balance (plant side) ----
     let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
+    let mut plant_named: Vec<Cause> = Vec::new();
     let mut baseline_fit = None;
     let mut latency_s = 0.0;
     let mut plant_df = 0;
@@ -403,11 +601,11 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             .iter()
             .map(|s| s.travel_m(0).max(s.travel_m(1)))
             .fold(0.0, f64::max);
-        let candidates: Vec<Box<dyn Candidate>> = vec![
-            Box::new(RailFriction),
-            Box::new(ForceRipple::for_travel(travel)),
-            Box::new(ActuationDelay::candidate()),
-            Box::new(SensorRotation::default()),
+        let candidates: Vec<Arc<dyn Candidate>> = vec![
+            Arc::new(RailFriction),
+            Arc::new(ForceRipple::for_travel(travel)),
+            Arc::new(ActuationDelay::candidate()),
+            Arc::new(SensorRotation::default()),
         ];
         let fits: Vec<CandidateFit> = candidates
             .into_par_iter()
@@ -419,58 +617,23 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             .collect::<Result<Vec<_>, DiscrepancyError>>()?;
         plant_df = folds.k.saturating_sub(1).max(1);
         plant_t = student_t_critical(alpha_each, plant_df as f64);
+        let judge = Judge {
+            base: &baseline,
+            base_nrmse,
+            t_critical: plant_t,
+            min_gain: opts.min_gain,
+            scale: &scale,
+            signals: &signals,
+            latency_s,
+        };
         plant_ranked = fits
             .into_iter()
-            .map(|cf| {
-                let c = cf.candidate.as_ref();
-                let fit = &cf.fit;
-                let (nrmse, gain, fold_gains, t) = fold_stats(fit, &baseline, base_nrmse);
-                let fold_params: Vec<Vec<(String, f64)>> = fit
-                    .folds
-                    .iter()
-                    .map(|f| c.parameters(f.setting, &f.beta, latency_s))
-                    .collect();
-                let (parameters, parameter_se) = params_with_se(
-                    c.parameters(fit.setting, &fit.beta, latency_s),
-                    &fold_params,
-                );
-                let r = Ranked {
-                    name: c.name().to_string(),
-                    balance: "cart".into(),
-                    gain,
-                    extended_nrmse: nrmse,
-                    fold_gains,
-                    t_statistic: t,
-                    significant: t > plant_t && gain >= opts.min_gain,
-                    rejected: Vec::new(),
-                    evidence_r2: None,
-                    parameters,
-                    parameter_se,
-                };
-                (r, cf)
-            })
-            .collect();
-        // The physical checks, for the candidates that passed the statistical ones
-        // (the evidence check re-forms every trial's residual).
-        for (r, cf) in &mut plant_ranked {
-            let c = cf.candidate.as_ref();
-            let s = cf.fit.setting;
-            r.rejected = immaterial(&r.name, &r.parameters, &scale, latency_s * 1e3);
-            r.rejected
-                .extend(at_edge(&r.name, c.setting(s), s, c.settings()));
-            if r.significant {
-                r.evidence_r2 = evidence_r2(c, s, &cf.fit.beta, &signals, latency_s)?;
-                if let Some(r2) = r.evidence_r2.filter(|r2| *r2 < MIN_EVIDENCE_R2) {
-                    r.rejected.push(format!(
-                        "its evidence does not follow its law: the fitted law explains {:.0} % of the binned partial residual (at least {:.0} % needed)",
-                        100.0 * r2,
-                        100.0 * MIN_EVIDENCE_R2
-                    ));
-                }
-            }
-            r.significant &= r.rejected.is_empty();
-        }
+            .map(|cf| Ok((judge.rank(cf.candidate.as_ref(), &cf.fit, &[])?, cf)))
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
         plant_ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        let (named, conditional) = forward_select(&plant_ranked, &judge, &folds)?;
+        plant_named = named;
+        d.conditional = conditional;
         d.baseline_nrmse = Some(base_nrmse);
         baseline_fit = Some(baseline);
     } else {
@@ -488,6 +651,16 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
 
     // ---- the hand balance (human side) ----
+    // A rotated sensor turns the hand's force too: with a rotation named on the cart
+    // balance, the hand balance judges the reading turned back by its angle.
+    let mut turned_deg = None;
+    if let Some(c) = plant_named.iter().find(|c| c.name == "sensor-rotation")
+        && let Some(&angle) = c.parameters.get("angle_deg")
+        && hand.is_ok()
+    {
+        hand = judge_hand(&turned_back(session, angle), opts.folds)?;
+        turned_deg = Some(angle);
+    }
     let mut hand_ranked: Vec<Ranked> = Vec::new();
     let mut hand_df = None;
     let mut hand_t = None;
@@ -574,6 +747,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     evidence_r2: None,
                     parameters,
                     parameter_se,
+                    given: Vec::new(),
                 });
             }
             hand_ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
@@ -598,31 +772,25 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
     d.extended_nrmse = d.baseline_nrmse;
     d.gain = d.baseline_nrmse.map(|_| 0.0);
-    // The best passing candidate of each balance, strongest first.
-    let mut named: Vec<Ranked> = plant_ranked
-        .iter()
-        .map(|(r, _)| r)
-        .find(|r| r.significant)
-        .into_iter()
-        .chain(hand_ranked.iter().find(|r| r.significant))
-        .cloned()
-        .collect();
-    named.sort_by(|a, b| b.gain.total_cmp(&a.gain));
-    d.causes = named
-        .iter()
-        .map(|r| Cause {
-            name: r.name.clone(),
-            balance: r.balance.clone(),
-            gain: r.gain,
-            parameters: r.parameters.clone(),
-            parameter_se: r.parameter_se.clone(),
-        })
-        .collect();
-    let cause = named.first().cloned();
-    if let Some(r) = &cause {
-        d.cause = r.name.clone();
-        d.parameters = r.parameters.clone();
-        d.parameter_se = r.parameter_se.clone();
+    // The plant's causes in the order of selection and the hand's best passing
+    // candidate, the balance whose first cause gains more first.
+    let plant_first = plant_ranked.iter().map(|(r, _)| r).find(|r| r.significant);
+    let hand_first = hand_ranked.iter().find(|r| r.significant);
+    let hand_named: Vec<Cause> = hand_first.map(Cause::of).into_iter().collect();
+    let plant_leads = match (plant_first, hand_first) {
+        (Some(p), Some(h)) => p.gain >= h.gain,
+        (p, _) => p.is_some(),
+    };
+    d.causes = if plant_leads {
+        plant_named.into_iter().chain(hand_named).collect()
+    } else {
+        hand_named.into_iter().chain(plant_named).collect()
+    };
+    let cause = if plant_leads { plant_first } else { hand_first }.cloned();
+    if let (Some(r), Some(c)) = (&cause, d.causes.first()) {
+        d.cause = c.name.clone();
+        d.parameters = c.parameters.clone();
+        d.parameter_se = c.parameter_se.clone();
         if r.balance == "hand" {
             d.baseline_nrmse = d.hand_baseline_nrmse;
         }
@@ -669,6 +837,11 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         });
     }
     d.evidence = evidence(&d, &ranking, cart_nrmse, hand.as_ref());
+    if let Some(angle) = turned_deg {
+        d.evidence.push(format!(
+            "the hand balance judged the sensor force turned back by the named rotation ({angle:.2}°)"
+        ));
+    }
     if !plant_ok {
         d.evidence.push(
             "no plant-side judgement possible: the cart force balance needs the motor command"

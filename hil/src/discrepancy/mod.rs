@@ -6,6 +6,7 @@
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
+//! | `joint.rs` | forward selection's joint model: named effects at their settings plus one more ([`Joint`]) |
 //! | `hand_signals.rs` | the variational response to each force pulse, against aligned unperturbed trials |
 //! | `hand.rs` | the hand balance and the human-side catalog effects ([`HandCandidate`]) |
 //! | `gram.rs` | least squares as sums of per-trial sufficient statistics |
@@ -31,6 +32,7 @@ mod friction;
 mod gram;
 mod hand;
 mod hand_signals;
+mod joint;
 mod model;
 pub mod plots;
 mod replay;
@@ -43,8 +45,8 @@ mod subject_fit;
 
 pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
 pub use candidate::{
-    Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, force_gains, gain_bounds, masses,
-    nominal_target, push_rows, residual_rows,
+    Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, Reshape, force_gains, gain_bounds,
+    masses, nominal_target, push_rows, residual_rows,
 };
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
@@ -53,7 +55,7 @@ pub use diagnose::{
     Ranked, Threshold, diagnose,
 };
 pub use error::DiscrepancyError;
-pub use friction::{RailFriction, SMOOTH_VELOCITIES_M_PER_S};
+pub use friction::{RailFriction, SMOOTH_VELOCITY_STEPS, smooth_velocity_m_per_s};
 pub use gram::{Gram, Intercepts};
 pub use hand::{
     FEEDBACK_DELAYS_MS, FIT_ARM_MASS_SCALE, GRIP_STIFFNESS_N_PER_M, GRIP_TIME_S, GripCompliance,
@@ -63,6 +65,7 @@ pub use hand::{
 pub use hand_signals::{
     HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, hand_responses,
 };
+pub use joint::{Joint, Member, MemberParameters};
 pub use model::ExtendedModel;
 pub use replay::{
     CHANNELS, ChannelError, CompareOptions, Comparison, ImpedanceComparison, RESPONSE_WINDOW_S,

@@ -116,32 +116,44 @@ impl Candidate for ForceRipple {
     fn columns(&self) -> usize {
         2 + OWN
     }
-    /// All pitches in one pass over the rows: `e^{i 2π k q}` for `k = k0 + j dk` by a
-    /// rotation recurrence over `j` (one `sin_cos` per row instead of one per pitch).
-    /// Equal to `Designed::design`'s Gram at every setting (a unit test checks it).
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        let nominal = Design::nominal(sig, latency_s);
-        const P: usize = 2 + OWN + NUISANCE_COLUMNS;
-        let mut grams = vec![Gram::new(P).with_bounds(gain_bounds(P)); self.n];
-        let mut offsets = vec![Intercepts::new(2, P); self.n];
-        let mut x = [0.0; P];
+        self.grams_given(sig, latency_s, &Design::nominal(sig, latency_s))
+    }
+    /// All pitches in one pass over the rows: `e^{i 2π k q}` for `k = k0 + j dk` by a
+    /// rotation recurrence over `j` (one `sin_cos` per row instead of one per pitch),
+    /// with `base`'s target, command and own regressors. Equal to the joined
+    /// `Designed::design`'s Gram at every setting (a unit test checks it).
+    fn grams_given(
+        &self,
+        sig: &BalanceSignals,
+        _latency_s: f64,
+        base: &Design,
+    ) -> Result<Vec<Gram>, DiscrepancyError> {
+        let kb = base.own[0].len();
+        let p = 2 + kb + OWN + NUISANCE_COLUMNS;
+        let mut grams = vec![Gram::new(p).with_bounds(gain_bounds(p)); self.n];
+        let mut offsets = vec![Intercepts::new(2, p); self.n];
+        let mut x = vec![0.0; p];
         for axis in 0..2 {
             let a = sig.at_rows(&sig.a[axis]);
             let q = sig.at_rows(&sig.q[axis]);
             // This axis's sin, cos columns; the other axis's stay zero.
-            let (js, jc) = (2 + 2 * axis, 3 + 2 * axis);
+            let (js, jc) = (2 + kb + 2 * axis, 3 + kb + 2 * axis);
             x.iter_mut().for_each(|v| *v = 0.0);
             for r in 0..q.len() {
                 let (s0, c0) = (TAU * self.k0_per_m * q[r]).sin_cos();
                 let (sd, cd) = (TAU * self.dk_per_m * q[r]).sin_cos();
                 let (mut s, mut c) = (s0, c0);
                 x[axis] = a[r];
-                x[2 + OWN + axis] = nominal.gain[axis][r];
-                let y = nominal.target[axis][r];
+                for (xi, col) in x[2..2 + kb].iter_mut().zip(&base.own[axis]) {
+                    *xi = col[r];
+                }
+                x[2 + kb + OWN + axis] = base.gain[axis][r];
+                let y = base.target[axis][r];
                 for (g, ic) in grams.iter_mut().zip(&mut offsets) {
                     x[js] = s;
                     x[jc] = c;
-                    g.push(&x, y, nominal.norm[axis][r]);
+                    g.push(&x, y, base.norm[axis][r]);
                     ic.push(axis, &x, y);
                     (s, c) = (s * cd + c * sd, c * cd - s * sd);
                 }

@@ -12,7 +12,9 @@
 //! sensor, an effect outside the catalog). Each angle's Gram is a quadratic form of one
 //! 5 × 5 Gram of `[a_x, a_y, u, F_own, F_other]` per trial.
 
-use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, gain_bounds, push_rows};
+use super::candidate::{
+    Candidate, Design, Designed, NUISANCE_COLUMNS, Reshape, gain_bounds, push_rows,
+};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
@@ -74,29 +76,44 @@ impl Candidate for SensorRotation {
     fn columns(&self) -> usize {
         2
     }
+    fn reshapes(&self) -> Reshape {
+        Reshape::Force
+    }
     fn grams(&self, sig: &BalanceSignals, latency_s: f64) -> Result<Vec<Gram>, DiscrepancyError> {
-        // Raw Gram of [a_x·1x, a_y·1y, u, F_own, F_other, u·1x, u·1y] with target 0,
-        // built (offsets eliminated) with the generic row pusher by treating all seven
-        // as regressors; each angle's Gram is a quadratic form of it: regressors the
-        // masses and the force gains, target `u + cos θ F_own + sin θ F_other`.
-        let u = [
-            sig.delayed_command(0, latency_s),
-            sig.delayed_command(1, latency_s),
-        ];
+        self.grams_given(sig, latency_s, &Design::nominal(sig, latency_s))
+    }
+    /// Every angle's Gram as a quadratic form of one raw Gram per trial. `base` must not
+    /// turn the sensor force (its force part is the reading itself); its command and
+    /// its own regressors are carried along.
+    fn grams_given(
+        &self,
+        sig: &BalanceSignals,
+        _latency_s: f64,
+        base: &Design,
+    ) -> Result<Vec<Gram>, DiscrepancyError> {
+        // Raw Gram of [a_x·1x, a_y·1y, base's own…, u, F_own, F_other, u·1x, u·1y] with
+        // target 0, built (offsets eliminated) with the generic row pusher by treating
+        // all as regressors; each angle's Gram is a quadratic form of it: regressors the
+        // masses, base's own and the force gains, target `u + cos θ F_own + sin θ F_other`.
+        let u = &base.gain;
         let f = [sig.at_rows(&sig.f[0]), sig.at_rows(&sig.f[1])];
-        let norms = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
         let zeros = [vec![0.0; sig.rows.len()], vec![0.0; sig.rows.len()]];
-        const RAW: usize = 5 + NUISANCE_COLUMNS;
-        let mut raw = Gram::new(RAW);
-        push_rows(&mut raw, sig, &zeros, &norms, &u, |axis, r, x| {
-            x[0] = u[axis][r];
-            x[1] = f[axis][r];
+        let kb = base.own[0].len();
+        let raw_p = 2 + kb + 3 + NUISANCE_COLUMNS;
+        let mut raw = Gram::new(raw_p);
+        push_rows(&mut raw, sig, &zeros, &base.norm, u, |axis, r, x| {
+            for (xi, col) in x.iter_mut().zip(&base.own[axis]) {
+                *xi = col[r];
+            }
+            x[kb] = u[axis][r];
+            x[kb + 1] = f[axis][r];
             // x rows: +F_y; y rows: −F_x.
-            x[2] = if axis == 0 { f[1][r] } else { -f[0][r] };
+            x[kb + 2] = if axis == 0 { f[1][r] } else { -f[0][r] };
         });
-        let at = |i: usize, j: usize| raw.xtx[i * RAW + j];
-        let regressors = [0, 1, 5, 6];
+        let at = |i: usize, j: usize| raw.xtx[i * raw_p + j];
+        let regressors: Vec<usize> = (0..2 + kb).chain([raw_p - 2, raw_p - 1]).collect();
         let p = regressors.len();
+        let t0 = 2 + kb;
         Ok((0..self.settings())
             .map(|s| {
                 let th = self.angle_deg(s).to_radians();
@@ -106,10 +123,14 @@ impl Candidate for SensorRotation {
                     for (j, &rj) in regressors.iter().enumerate() {
                         g.xtx[i * p + j] = at(ri, rj);
                     }
-                    g.xty[i] = (0..3).map(|k| w[k] * at(ri, 2 + k)).sum();
+                    g.xty[i] = (0..3).map(|k| w[k] * at(ri, t0 + k)).sum();
                 }
                 g.yty = (0..3)
-                    .map(|k| (0..3).map(|l| w[k] * w[l] * at(2 + k, 2 + l)).sum::<f64>())
+                    .map(|k| {
+                        (0..3)
+                            .map(|l| w[k] * w[l] * at(t0 + k, t0 + l))
+                            .sum::<f64>()
+                    })
                     .sum::<f64>()
                     .max(0.0);
                 g.norm_sq = raw.norm_sq;
