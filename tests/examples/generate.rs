@@ -9,7 +9,7 @@
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
-//! Arguments: effect name (`none` or a catalog name), seed, output folder (new or
+//! Arguments: effect name (`none`, a catalog name, or two joined by `+`), seed, output folder (new or
 //! empty); optional fourth: trials (default 32, or a third more than the pulses with
 //! `--repetitions`). `--no-motor-noise` switches the arm's motor noise off, keeping
 //! subject and effect; `--repetitions N` gives N pulses per angle (default 3, the

@@ -46,13 +46,30 @@ pub const EFFECTS: [&str; 8] = [
 /// The 4 kHz control tick, s (the world rounds delays to whole ticks).
 const TICK_S: f64 = 2.5e-4;
 
-/// A hidden effect: its catalog name, the parameters a diagnosis should recover (units
-/// in the names) and the world configuration that produces it.
+/// Pairs of effects a generated session may hide together ([`draw`] with `a+b`): two
+/// plant-side effects on one rig (friction and cogging, friction and a latency), one
+/// of each side (the friction and a heavier handle; a rotated sensor and a
+/// heavier handle, the shared rig's), and a delay with a rotated sensor (both reshape
+/// the balance rather than add to it).
+pub const PAIRS: [&str; 5] = [
+    "rail-friction+force-ripple",
+    "rail-friction+actuation-delay",
+    "actuation-delay+sensor-rotation",
+    "rail-friction+handle-mass",
+    "sensor-rotation+handle-mass",
+];
+
+/// A hidden effect (or several): its catalog name (`a+b` for several), the parameters a
+/// diagnosis should recover (units in the names) and the world configuration that
+/// produces it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Hidden {
-    /// Catalog name or `none`.
+    /// Catalog name, `a+b` for several, or `none`.
     pub effect: String,
-    /// The parameters to recover.
+    /// Each hidden effect's catalog name and the parameters to recover, in the order of
+    /// the name (empty for `none`).
+    pub each: Vec<(String, BTreeMap<String, f64>)>,
+    /// The parameters to recover, all effects' together (for one effect, its own).
     pub parameters: BTreeMap<String, f64>,
     /// What the world simulates.
     pub effects: PlantEffects,
@@ -82,8 +99,43 @@ pub struct Hidden {
 ///   (4–36 N s/m; a firm grasp on a handle through skin and soft tissue). Only the
 ///   stiffness is a catalog parameter and so in [`Hidden::parameters`].
 /// - `handle-mass`: 0.3–1.0 kg (an unlisted adapter, a heavier handle or grip tube).
+///
+/// `a+b` draws each named effect in turn from the same generator and hides them
+/// together; `None` when a name is unknown or repeated, or one of them is `none`.
 #[must_use]
 pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
+    if !effect.contains('+') {
+        return draw_one(effect, rng);
+    }
+    let names: Vec<&str> = effect.split('+').collect();
+    let mut all = Hidden {
+        effect: effect.to_string(),
+        each: Vec::new(),
+        parameters: BTreeMap::new(),
+        effects: PlantEffects::default(),
+        stretch_reflex: None,
+    };
+    for (i, name) in names.iter().enumerate() {
+        if *name == "none" || names[..i].contains(name) {
+            return None;
+        }
+        let h = draw_one(name, rng)?;
+        let e = h.effects;
+        let w = &mut all.effects;
+        w.rail_friction = w.rail_friction.or(e.rail_friction);
+        w.force_ripple = w.force_ripple.or(e.force_ripple);
+        w.actuation_delay = w.actuation_delay.or(e.actuation_delay);
+        w.sensor = w.sensor.or(e.sensor);
+        w.handle_mass = w.handle_mass.or(e.handle_mass);
+        w.grip_compliance = w.grip_compliance.or(e.grip_compliance);
+        all.stretch_reflex = all.stretch_reflex.or(h.stretch_reflex);
+        all.parameters.extend(h.parameters.clone());
+        all.each.extend(h.each);
+    }
+    Some(all)
+}
+
+fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
     let mut effects = PlantEffects::default();
     let mut stretch_reflex = None;
     let mut p = BTreeMap::new();
@@ -160,6 +212,11 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
     }
     Some(Hidden {
         effect: effect.to_string(),
+        each: if effect == "none" {
+            Vec::new()
+        } else {
+            vec![(effect.to_string(), p.clone())]
+        },
         parameters: p,
         effects,
         stretch_reflex,
@@ -304,8 +361,9 @@ pub fn generate_design(
     out: &Path,
 ) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let hidden = draw(effect, &mut rng)
-        .ok_or_else(|| format!("unknown effect {effect:?}; known: {EFFECTS:?}"))?;
+    let hidden = draw(effect, &mut rng).ok_or_else(|| {
+        format!("unknown effect {effect:?}; known: {EFFECTS:?}, or two of them joined by +")
+    })?;
     let mut protocol = Protocol::builtin("reach-perturb")?;
     protocol.recording.rate_hz = design.rate_hz;
     // The pulses in random order among the reaches, all of them within the recorded

@@ -31,7 +31,7 @@
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
-use rigtwin_tests::generator::{Design, EFFECTS, Generated, generate_design, parse_pulse};
+use rigtwin_tests::generator::{Design, EFFECTS, Generated, PAIRS, generate_design, parse_pulse};
 
 /// The shared layout on the ideal rig and without the arm's motor noise: what is left
 /// is the balance's own structural floor.
@@ -350,6 +350,115 @@ fn more_pulses_lower_the_hand_noise_floor() {
     assert!((0.45..=0.80).contains(&(b / a)), "ratio {}", b / a);
 }
 
+/// How a session hiding two effects was diagnosed: whether exactly the hidden effects
+/// were named, and whether each one's parameters are within 20 % of the hidden ones.
+fn judge_pair(g: &Generated, d: &Diagnosis) -> (bool, bool) {
+    let mut hidden: Vec<&str> = g.hidden.each.iter().map(|(n, _)| n.as_str()).collect();
+    let mut named: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    hidden.sort_unstable();
+    named.sort_unstable();
+    let within = g.hidden.each.iter().all(|(name, params)| {
+        d.causes.iter().find(|c| c.name == *name).is_some_and(|c| {
+            params.iter().all(|(k, t)| {
+                c.parameters
+                    .get(k)
+                    .is_some_and(|v| (v - t).abs() <= 0.2 * t.abs())
+            })
+        })
+    });
+    (hidden == named, within)
+}
+
+fn check_pair(effect: &str, seed: u64) {
+    let (g, d) = run(effect, seed);
+    eprintln!("hidden {:?}", g.hidden.each);
+    for c in &d.causes {
+        eprintln!(
+            "named  {} ({}, gain {:.3}, given {:?}) {:?}",
+            c.name, c.balance, c.gain, c.given, c.parameters
+        );
+    }
+    for r in &d.conditional {
+        eprintln!(
+            "  {:<16} given {:?} gain {:>7.3} t {:>7.1} {:?}",
+            r.name, r.given, r.gain, r.t_statistic, r.rejected
+        );
+    }
+    let (named, within) = judge_pair(&g, &d);
+    assert!(named, "named {:?}", d.causes);
+    assert!(within, "parameters off");
+}
+
+/// Friction and cogging on one rig (both cart balance): forward selection names the
+/// stronger, then the other given it, each with its parameters within 20 % of the
+/// hidden ones from the joint fit.
+#[test]
+fn friction_and_ripple_are_both_named() {
+    check_pair("rail-friction+force-ripple", 31);
+}
+
+/// The rig: friction and a heavier handle, one on each balance.
+#[test]
+fn friction_and_a_heavier_handle_are_both_named() {
+    check_pair("rail-friction+handle-mass", 32);
+}
+
+/// A delayed actuator with a rotated sensor: both reshape the balance (the command's
+/// timing, the force's frame), so the joint model carries both.
+#[test]
+fn delay_and_rotation_are_both_named() {
+    check_pair("actuation-delay+sensor-rotation", 33);
+}
+
+/// A rotated sensor turns the hand's force too: with the rotation named on the cart
+/// balance, the hand balance judges the reading turned back, and finds the handle.
+#[test]
+fn rotation_and_a_heavier_handle_are_both_named() {
+    check_pair("sensor-rotation+handle-mass", 34);
+}
+
+/// Sessions hiding two effects at once: `SWEEP_SEEDS` (default 20) per pair of
+/// [`PAIRS`] (or `SWEEP_EFFECTS`), seeds 3000 on; prints per pair how often exactly
+/// both were named and how often both parameter sets were within 20 %.
+#[test]
+#[ignore = "about 100 sessions; run with --ignored to measure two-effect detection"]
+fn sweep_two_effects() {
+    let seeds: u64 = std::env::var("SWEEP_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
+        .ok()
+        .map(|v| v.split(',').map(str::to_string).collect());
+    let mut rows = Vec::new();
+    for pair in PAIRS {
+        if only.as_ref().is_some_and(|o| !o.iter().any(|e| e == pair)) {
+            continue;
+        }
+        let (mut named, mut within) = (0, 0);
+        for seed in 0..seeds {
+            let (g, d) = run(pair, 3000 + seed);
+            let (n, w) = judge_pair(&g, &d);
+            named += usize::from(n);
+            within += usize::from(n && w);
+            eprintln!(
+                "{pair} seed {seed}: hidden {:?}; named {:?}",
+                g.hidden.each,
+                d.causes
+                    .iter()
+                    .map(|c| (&c.name, c.gain, &c.parameters))
+                    .collect::<Vec<_>>()
+            );
+        }
+        rows.push(format!(
+            "{pair:<34} both named {named}/{seeds}, and both within 20 % {within}/{seeds}"
+        ));
+    }
+    for r in rows {
+        println!("{r}");
+    }
+}
+
 /// The false-alarm rate: `SWEEP_SEEDS` (default 60) realistic sessions hiding nothing
 /// (seeds 2000 on), each diagnosed blind; prints every named cause and the rate with
 /// its exact one-sided 95 % upper bound, and asserts at most 5 %.
@@ -418,6 +527,9 @@ fn sweep_confusion_matrix() {
     let mut names: Vec<&str> = EFFECTS.to_vec();
     let mut matrix = vec![vec![0usize; EFFECTS.len() + 1]; EFFECTS.len()];
     let mut within = vec![0usize; EFFECTS.len()];
+    // Sessions where more causes were named than the one hidden (forward selection's
+    // false alarms).
+    let mut extra = vec![0usize; EFFECTS.len()];
     for (i, effect) in EFFECTS.iter().enumerate() {
         if only
             .as_ref()
@@ -432,6 +544,7 @@ fn sweep_confusion_matrix() {
                 .position(|e| *e == d.cause)
                 .unwrap_or(EFFECTS.len());
             matrix[i][j] += 1;
+            extra[i] += usize::from(d.causes.len() > usize::from(i > 0));
             eprintln!(
                 "{effect} seed {seed}: hidden {:?}, found {} {:?} gain {:?} (hand baseline {:?})",
                 g.hidden.parameters, d.cause, d.parameters, d.gain, d.hand_baseline_nrmse
@@ -452,10 +565,11 @@ fn sweep_confusion_matrix() {
     );
     for (i, row) in matrix.iter().enumerate() {
         println!(
-            "{:<16} {}   params within 20 %: {}/{seeds}",
+            "{:<16} {}   params within 20 %: {}/{seeds}, a further cause named: {}/{seeds}",
             EFFECTS[i],
             row.iter().map(|c| format!("{c:>16}")).collect::<String>(),
-            within[i]
+            within[i],
+            extra[i]
         );
     }
 }
