@@ -28,7 +28,8 @@ use rigtwin_arm::params::StretchReflex;
 use rigtwin_device::config::ForcePulseConfig;
 use rigtwin_world::PlantEffects;
 use rigtwin_world::config::{
-    ActuationDelay, ForceRipple, GripCompliance, HandleMass, RailFriction, SensorEffect,
+    ActuationDelay, CableSpring, ForceRipple, GripCompliance, HandleMass, RailFriction,
+    SensorEffect,
 };
 
 /// The effects a generated session may hide (`none` hides nothing).
@@ -45,6 +46,11 @@ pub const EFFECTS: [&str; 8] = [
 
 /// The 4 kHz control tick, s (the world rounds delays to whole ticks).
 const TICK_S: f64 = 2.5e-4;
+
+/// Effects outside the diagnosis's catalog a generated session may hide ([`draw`]): a
+/// diagnosis must not name a catalog effect for them but report the residual as
+/// unexplained.
+pub const OUT_OF_CATALOG: [&str; 2] = ["cable-spring", "sensor-lowpass"];
 
 /// Pairs of effects a generated session may hide together ([`draw`] with `a+b`): two
 /// plant-side effects on one rig (friction and cogging, friction and a latency), one
@@ -100,6 +106,13 @@ pub struct Hidden {
 ///   stiffness is a catalog parameter and so in [`Hidden::parameters`].
 /// - `handle-mass`: 0.3–1.0 kg (an unlisted adapter, a heavier handle or grip tube).
 ///
+/// Outside the catalog ([`OUT_OF_CATALOG`]):
+/// - `cable-spring`: a cable carrier on each rail pulling its cart with 20–60 N/m
+///   towards a rest position within ±5 cm of the workspace's centre (2–6 N over a
+///   10 cm reach: an energy chain's bending force).
+/// - `sensor-lowpass`: the force sensor's reading through a first-order low-pass at
+///   10–30 Hz (an amplifier's anti-alias or a DSP filter set low: 5–16 ms of lag).
+///
 /// `a+b` draws each named effect in turn from the same generator and hides them
 /// together; `None` when a name is unknown or repeated, or one of them is `none`.
 #[must_use]
@@ -128,6 +141,7 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
         w.sensor = w.sensor.or(e.sensor);
         w.handle_mass = w.handle_mass.or(e.handle_mass);
         w.grip_compliance = w.grip_compliance.or(e.grip_compliance);
+        w.cable_spring = w.cable_spring.or(e.cable_spring);
         all.stretch_reflex = all.stretch_reflex.or(h.stretch_reflex);
         all.parameters.extend(h.parameters.clone());
         all.each.extend(h.each);
@@ -200,6 +214,24 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
             };
             p.insert("stiffness_n_per_m".into(), g.stiffness_n_per_m);
             effects.grip_compliance = Some(g);
+        }
+        "cable-spring" => {
+            let c = CableSpring {
+                stiffness_n_per_m: [rng.random_range(20.0..60.0), rng.random_range(20.0..60.0)],
+                rest_m: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
+            };
+            p.insert("stiffness_x_n_per_m".into(), c.stiffness_n_per_m[0]);
+            p.insert("stiffness_y_n_per_m".into(), c.stiffness_n_per_m[1]);
+            effects.cable_spring = Some(c);
+        }
+        "sensor-lowpass" => {
+            let s = SensorEffect {
+                rotation_deg: 0.0,
+                offset_n: [0.0; 2],
+                lowpass_hz: rng.random_range(10.0..30.0),
+            };
+            p.insert("lowpass_hz".into(), s.lowpass_hz);
+            effects.sensor = Some(s);
         }
         "handle-mass" => {
             let h = HandleMass {

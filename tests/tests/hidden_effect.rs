@@ -31,7 +31,9 @@
 
 use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
-use rigtwin_tests::generator::{Design, EFFECTS, Generated, PAIRS, generate_design, parse_pulse};
+use rigtwin_tests::generator::{
+    Design, EFFECTS, Generated, OUT_OF_CATALOG, PAIRS, generate_design, parse_pulse,
+};
 
 /// The shared layout on the ideal rig and without the arm's motor noise: what is left
 /// is the balance's own structural floor.
@@ -417,6 +419,94 @@ fn rotation_and_a_heavier_handle_are_both_named() {
     check_pair("sensor-rotation+handle-mass", 34);
 }
 
+/// How a session hiding an effect outside the catalog was diagnosed: whether no catalog
+/// cause was named, and whether `unexplained` holds the term of the hidden law with
+/// its coefficient on the y axis (the reach's, where the carts travel 10 cm; the x cart
+/// moves only under the pulses) within 20 %: a cable spring's stiffness as the position
+/// term's `−k`, a low-pass's time constant `1/(2π f_c)` as the force-rate term's.
+fn judge_outside(g: &Generated, d: &Diagnosis) -> (bool, bool) {
+    let p = &g.hidden.parameters;
+    let (term, want) = if g.hidden.effect == "cable-spring" {
+        ("position", -p["stiffness_y_n_per_m"])
+    } else {
+        (
+            "force-rate",
+            1.0 / (std::f64::consts::TAU * p["lowpass_hz"]),
+        )
+    };
+    let found = d.unexplained.as_ref().is_some_and(|u| {
+        u.terms
+            .iter()
+            .any(|t| t.term == term && (t.coefficient_y - want).abs() <= 0.2 * want.abs())
+    });
+    (d.causes.is_empty(), found)
+}
+
+fn check_outside(effect: &str, seed: u64) {
+    let (g, d) = run(effect, seed);
+    eprintln!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
+    eprintln!("named {:?}", d.causes);
+    eprintln!("unexplained {:?}", d.unexplained);
+    for r in d.ranking.iter().take(3) {
+        eprintln!("  {:<16} gain {:>7.3} {:?}", r.name, r.gain, r.rejected);
+    }
+    let (none, found) = judge_outside(&g, &d);
+    assert!(none, "a catalog cause was named: {:?}", d.causes);
+    assert!(found, "the hidden law is not in unexplained");
+}
+
+/// A cable carrier pulls each cart towards a rest position, a law the catalog lacks:
+/// the diagnosis names no catalog effect (before the library, a 95 mm "ripple" was
+/// named) and reports the residual as unexplained, `force ≈ −k (y − y₀)` with `k`
+/// within 20 %.
+#[test]
+fn a_cable_spring_is_unexplained_not_a_ripple() {
+    check_outside("cable-spring", 4000);
+}
+
+/// A force sensor read through a low-pass: no catalog effect (the hand balance, which
+/// reads the same sensor, judged the lag a grip compliance before it was undone), and
+/// `unexplained` holds `τ · dF/dt` with `τ` within 20 % of the filter's.
+#[test]
+fn a_sensor_lag_is_unexplained_not_a_grip() {
+    check_outside("sensor-lowpass", 4001);
+}
+
+/// Sessions hiding an effect outside the catalog: `SWEEP_SEEDS` (default 20) per effect
+/// of [`OUT_OF_CATALOG`], seeds 4000 on; prints how often no catalog cause was named
+/// and how often `unexplained` held the hidden law within 20 %.
+#[test]
+#[ignore = "about 40 sessions; run with --ignored to measure out-of-catalog sessions"]
+fn sweep_out_of_catalog() {
+    let seeds: u64 = std::env::var("SWEEP_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(20);
+    let mut rows = Vec::new();
+    for effect in OUT_OF_CATALOG {
+        let (mut none, mut found, mut any) = (0, 0, 0);
+        for seed in 0..seeds {
+            let (g, d) = run(effect, 4000 + seed);
+            let (n, f) = judge_outside(&g, &d);
+            none += usize::from(n);
+            found += usize::from(f);
+            any += usize::from(d.unexplained.is_some());
+            eprintln!(
+                "{effect} seed {seed}: hidden {:?}; named {:?}; unexplained {:?}",
+                g.hidden.parameters,
+                d.causes.iter().map(|c| &c.name).collect::<Vec<_>>(),
+                d.unexplained.as_ref().map(|u| &u.hint)
+            );
+        }
+        rows.push(format!(
+            "{effect:<16} no catalog cause {none}/{seeds}, unexplained {any}/{seeds}, the hidden law within 20 % {found}/{seeds}"
+        ));
+    }
+    for r in rows {
+        println!("{r}");
+    }
+}
+
 /// Sessions hiding two effects at once: `SWEEP_SEEDS` (default 20) per pair of
 /// [`PAIRS`] (or `SWEEP_EFFECTS`), seeds 3000 on; prints per pair how often exactly
 /// both were named and how often both parameter sets were within 20 %.
@@ -470,8 +560,13 @@ fn sweep_false_alarms() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(60);
     let mut alarms = 0;
+    let mut unexplained = 0;
     for seed in 0..seeds {
         let (_, d) = run("none", 2000 + seed);
+        if let Some(u) = &d.unexplained {
+            unexplained += 1;
+            eprintln!("seed {}: unexplained {}", 2000 + seed, u.hint);
+        }
         if !d.causes.is_empty() {
             alarms += 1;
             eprintln!("seed {}: named {:?}", 2000 + seed, d.causes);
@@ -496,7 +591,7 @@ fn sweep_false_alarms() {
         if cdf(mid) > 0.05 { lo = mid } else { hi = mid }
     }
     println!(
-        "false alarms: {alarms} of {seeds} sessions hiding nothing ({:.1} %, 95 % upper bound {:.1} %)",
+        "false alarms: {alarms} of {seeds} sessions hiding nothing ({:.1} %, 95 % upper bound {:.1} %); unexplained reported in {unexplained}",
         100.0 * alarms as f64 / n,
         100.0 * hi
     );
@@ -530,6 +625,8 @@ fn sweep_confusion_matrix() {
     // Sessions where more causes were named than the one hidden (forward selection's
     // false alarms).
     let mut extra = vec![0usize; EFFECTS.len()];
+    // Sessions where structure outside the catalog was reported.
+    let mut unexplained = vec![0usize; EFFECTS.len()];
     for (i, effect) in EFFECTS.iter().enumerate() {
         if only
             .as_ref()
@@ -545,6 +642,7 @@ fn sweep_confusion_matrix() {
                 .unwrap_or(EFFECTS.len());
             matrix[i][j] += 1;
             extra[i] += usize::from(d.causes.len() > usize::from(i > 0));
+            unexplained[i] += usize::from(d.unexplained.is_some());
             eprintln!(
                 "{effect} seed {seed}: hidden {:?}, found {} {:?} gain {:?} (hand baseline {:?})",
                 g.hidden.parameters, d.cause, d.parameters, d.gain, d.hand_baseline_nrmse
@@ -565,11 +663,12 @@ fn sweep_confusion_matrix() {
     );
     for (i, row) in matrix.iter().enumerate() {
         println!(
-            "{:<16} {}   params within 20 %: {}/{seeds}, a further cause named: {}/{seeds}",
+            "{:<16} {}   params within 20 %: {}/{seeds}, a further cause named: {}/{seeds}, unexplained: {}/{seeds}",
             EFFECTS[i],
             row.iter().map(|c| format!("{c:>16}")).collect::<String>(),
             within[i],
-            extra[i]
+            extra[i],
+            unexplained[i]
         );
     }
 }

@@ -224,6 +224,10 @@ pub struct PlantEffects {
     pub handle_mass: Option<HandleMass>,
     /// A compliant grip instead of the rigid pin.
     pub grip_compliance: Option<GripCompliance>,
+    /// A cable carrier pulling each cart towards a rest position (not in the
+    /// diagnosis's catalog: an effect a lab's rig may have that the diagnosis must
+    /// report as unexplained rather than as the nearest catalog entry).
+    pub cable_spring: Option<CableSpring>,
 }
 
 /// Friction on each cart by its own rail velocity `v`:
@@ -307,6 +311,19 @@ pub struct SensorEffect {
     pub offset_n: [f64; 2],
     /// Cut-off of a first-order low-pass on the true force, Hz; 0 disables it.
     pub lowpass_hz: f64,
+}
+
+/// A cable carrier (energy chain) on each rail: the cables bend around the carrier's
+/// loop and pull the cart towards where the loop is relaxed, about linearly over the
+/// travel: `F_i = −stiffness_n_per_m[i] · (q_i − rest_m[i])` on axis `i` at its cart's
+/// rail position `q_i`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableSpring {
+    /// Stiffness per axis, N/m.
+    pub stiffness_n_per_m: [f64; 2],
+    /// Rail position where the pull vanishes, per axis, m.
+    pub rest_m: [f64; 2],
 }
 
 /// Extra mass added to the handle (between sensor and hand).
@@ -464,6 +481,15 @@ impl RigConfig {
             finite("effects.sensor.offset_n", s.offset_n[0])?;
             finite("effects.sensor.offset_n", s.offset_n[1])?;
             non_negative("effects.sensor.lowpass_hz", s.lowpass_hz)?;
+        }
+        if let Some(c) = &e.cable_spring {
+            for a in 0..2 {
+                non_negative(
+                    "effects.cable_spring.stiffness_n_per_m",
+                    c.stiffness_n_per_m[a],
+                )?;
+                finite("effects.cable_spring.rest_m", c.rest_m[a])?;
+            }
         }
         if let Some(h) = &e.handle_mass {
             non_negative("effects.handle_mass.extra_mass_kg", h.extra_mass_kg)?;

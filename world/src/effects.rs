@@ -3,7 +3,7 @@
 
 use std::f64::consts::PI;
 
-use crate::config::{ForceRipple, RailFriction, SensorEffect};
+use crate::config::{CableSpring, ForceRipple, RailFriction, SensorEffect};
 
 /// Rail friction force on a cart moving at `v_m_per_s` along its rail, N:
 /// `−(Fc · tanh(v / v_s) + b · v)`.
@@ -11,6 +11,12 @@ use crate::config::{ForceRipple, RailFriction, SensorEffect};
 pub fn friction_force_n(f: &RailFriction, v_m_per_s: f64) -> f64 {
     -(f.coulomb_n * (v_m_per_s / f.smooth_velocity_m_per_s).tanh()
         + f.viscous_n_s_per_m * v_m_per_s)
+}
+
+/// Cable carrier's pull on the cart of `axis` at rail position `q_m`, N.
+#[must_use]
+pub fn cable_force_n(c: &CableSpring, axis: usize, q_m: f64) -> f64 {
+    -c.stiffness_n_per_m[axis] * (q_m - c.rest_m[axis])
 }
 
 /// Cogging force added to the motor of `axis` (0 = x, 1 = y) whose cart is at `q_m`

@@ -69,6 +69,7 @@
 //! | `sensor { rotation_deg, offset_n, lowpass_hz }` | `raw = R(θ) · lowpass(F) + offset`; first-order lag, exact discretisation | the reading only |
 //! | `handle_mass { extra_mass_kg }` | mass added to the handle, between sensor and hand | inertia the sensor sees |
 //! | `grip_compliance { stiffness_n_per_m, damping_n_s_per_m }` | spring-damper between hand and handle instead of the pin | hand–handle coupling |
+//! | `cable_spring { stiffness_n_per_m, rest_m }` | a cable carrier's pull `−k_i (q_i − rest_i)` on each cart by its rail position (not in the diagnosis's catalog) | cart motion |
 //!
 //! Also always present: encoder quantisation `floor(x / 1 µm)`, white Gaussian force
 //! noise (0.05 N RMS by default) from the seeded [`rand_chacha::ChaCha8Rng`] passed in.

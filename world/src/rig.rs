@@ -26,7 +26,7 @@ use rigtwin_arm::params::ArmParams;
 use rigtwin_device::{MotorCommand, Rate, RigIo, SensorFrame, Tick};
 
 use crate::config::{Attachment, Grasp, GripCompliance, RigConfig};
-use crate::effects::{DelayLine, SensorModel, friction_force_n, ripple_force_n};
+use crate::effects::{DelayLine, SensorModel, cable_force_n, friction_force_n, ripple_force_n};
 use crate::endstop::RailStops;
 use crate::error::WorldError;
 
@@ -67,6 +67,8 @@ pub struct StepTruth {
     pub motor_n: [f64; 2],
     /// Rail friction on the lower cart (x) and the upper cart (y), N.
     pub friction_n: [f64; 2],
+    /// Cable carriers' pull on the lower cart (x) and the upper cart (y), N.
+    pub cable_n: [f64; 2],
     /// End-stop force on the lower cart (x) and the upper cart (y), N.
     pub end_stop_n: [f64; 2],
     /// Force the handle exerted on the cart through the sensor (what an ideal sensor
@@ -437,12 +439,16 @@ impl SimRig {
             ],
             None => [0.0; 2],
         };
+        let cable = match &self.cfg.effects.cable_spring {
+            Some(c) => [cable_force_n(c, 0, lo_pos.x), cable_force_n(c, 1, y_rel)],
+            None => [0.0; 2],
+        };
         let stop = [
             self.stops[0].force_n(lo_pos.x, lo_vel.x),
             self.stops[1].force_n(y_rel, y_rel_vel),
         ];
-        let fx = motor[0] + friction[0] + stop[0];
-        let fy = motor[1] + friction[1] + stop[1];
+        let fx = motor[0] + friction[0] + cable[0] + stop[0];
+        let fy = motor[1] + friction[1] + cable[1] + stop[1];
 
         let bodies = &mut self.world.bodies;
         // The y motor, y friction and y stops act between the carts.
@@ -505,6 +511,7 @@ impl SimRig {
         self.truth = StepTruth {
             motor_n: motor,
             friction_n: friction,
+            cable_n: cable,
             end_stop_n: stop,
             sensor_n: sensor,
             hand_on_handle_n: hand,

@@ -4,13 +4,20 @@
 //! the held-out gain is both beyond chance and material.
 //!
 //! The two balances see different effects: the human-side effects act above the force
-//! sensor and cannot change the cart balance; the plant-side ones (but sensor rotation)
-//! do not enter the hand balance. So the best candidate of each balance that passes
-//! every test is named, both when both pass ([`Diagnosis::causes`], strongest held-out
-//! gain first; `cause` is the first, or `none`). Besides the statistics, a candidate
-//! must be physical and material, inside its search range and agree with its own
-//! binned evidence ([`super::decide`]); a candidate that fails is listed with the
-//! reason ([`Ranked::rejected`]).
+//! sensor and cannot change the cart balance; the plant-side ones do not enter the hand
+//! balance, but for a sensor rotation, which turns the hand's force too: with a
+//! rotation named, the hand balance judges the reading turned back by its angle. On
+//! the cart balance, effects are selected forward: the best candidate that passes
+//! every test is named; every other one is then fitted jointly with it
+//! ([`super::joint::Joint`], the named one's setting refined given the new one) and
+//! judged against the named one alone by the same tests; the best that passes is named
+//! too, and so on ([`Diagnosis::conditional`]). The parameters of every cart-balance
+//! cause come from the last joint fit. On the hand balance the best passing candidate
+//! is named. [`Diagnosis::causes`] lists them, the balance whose first cause gains more
+//! first; `cause` is the first, or `none`. Besides the statistics, a candidate must be
+//! physical and material, inside its search range and agree with its own binned
+//! evidence ([`super::decide`]); a candidate that fails is listed with the reason
+//! ([`Ranked::rejected`]).
 //!
 //! The chance threshold: each fold gives a held-out gain `gₖ = 1 − √(SSEₖ,ext / SSEₖ,base)`.
 //! Under "the candidate explains nothing" the folds' gains scatter around a value ≤ 0
@@ -39,7 +46,9 @@ use serde::Serialize;
 
 use super::candidate::{Baseline, Candidate};
 use super::crossval::{CvFit, Folds, cross_validate};
-use super::decide::{MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial};
+use super::decide::{
+    FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial,
+};
 use super::delay::ActuationDelay;
 use super::error::DiscrepancyError;
 use super::friction::RailFriction;
@@ -50,7 +59,9 @@ use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
 use super::stats::{jackknife_se, mean_sd, student_t_critical};
+use super::unexplained::{LIBRARY, Term, peak_force_n};
 use crate::session::Session;
+use rigtwin_device::signal::{EdgeMode, savgol_filter};
 
 /// Catalog effects judged from the hand balance (the response to the force pulses).
 pub const HUMAN_SIDE: [&str; 3] = ["stretch-reflex", "grip-compliance", "handle-mass"];
@@ -177,6 +188,48 @@ pub struct Cause {
     pub given: Vec<String>,
 }
 
+/// Structure the catalog leaves in the cart balance: terms of the library
+/// ([`super::unexplained`]) that pass every test given the named causes.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Unexplained {
+    /// The balance (`cart`).
+    pub balance: String,
+    /// The named causes the terms were judged against.
+    pub given: Vec<String>,
+    /// Held-out gain of the terms together against the named causes (or the baseline).
+    pub gain: f64,
+    /// The terms in the order they entered.
+    pub terms: Vec<FoundTerm>,
+    /// Correlation of the residual (without the terms) with the carts' position,
+    /// velocity, acceleration, sensor force, motor command and time in the trial.
+    pub correlations: BTreeMap<String, f64>,
+    /// A sentence: the law the terms fit and what it hints at.
+    pub hint: String,
+}
+
+/// A term of the library found in the residual.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FoundTerm {
+    /// The term's name (`position`, ...).
+    pub term: String,
+    /// The fitted law of the force on each cart.
+    pub law: String,
+    /// Unit of the coefficients.
+    pub unit: String,
+    /// Coefficient of the force on the x cart.
+    pub coefficient_x: f64,
+    /// Coefficient of the force on the y cart.
+    pub coefficient_y: f64,
+    /// Jackknife standard error of `coefficient_x` over the folds.
+    pub se_x: f64,
+    /// Jackknife standard error of `coefficient_y` over the folds.
+    pub se_y: f64,
+    /// Held-out gain of the term against the model before it.
+    pub gain: f64,
+    /// What such a term hints at.
+    pub meaning: String,
+}
+
 /// The outcome of [`diagnose`], as `rigtwin diagnose --json` prints it.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Diagnosis {
@@ -244,6 +297,9 @@ pub struct Diagnosis {
     /// named, fitted jointly with the causes named so far ([`Ranked::given`]) and judged
     /// against them alone, round by round, best gain first within a round.
     pub conditional: Vec<Ranked>,
+    /// Structure left in the cart balance that no catalog effect explains, with the law
+    /// it fits (`None` when the residual has none that passes the tests).
+    pub unexplained: Option<Unexplained>,
     /// The best candidate after the cause (or the best one when the cause is `none`).
     pub runner_up: Option<String>,
     /// The decision rule.
@@ -425,10 +481,16 @@ fn forward_select(
     ranked: &[(Ranked, CandidateFit)],
     judge: &Judge<'_>,
     folds: &Folds,
-) -> Result<(Vec<Cause>, Vec<Ranked>), DiscrepancyError> {
+) -> Result<Selection, DiscrepancyError> {
     let Some((first, cf)) = ranked.iter().find(|(r, _)| r.significant) else {
-        return Ok((Vec::new(), Vec::new()));
+        return Ok(Selection {
+            causes: Vec::new(),
+            members: Vec::new(),
+            rounds: Vec::new(),
+            nrmse: judge.base_nrmse,
+        });
     };
+    let mut nrmse = first.extended_nrmse;
     let lat = judge.latency_s;
     let mut causes = vec![Cause::of(first)];
     let mut chosen: Vec<Member> = vec![(cf.candidate.clone(), cf.fit.setting)];
@@ -496,24 +558,369 @@ fn forward_select(
             (cause.parameters, cause.parameter_se) = params_with_se(params, &fp);
         }
         causes.push(Cause::of(&r));
+        nrmse = r.extended_nrmse;
         chosen = joint.fixed.clone();
         chosen.push((joint.next.clone(), fit.setting));
     }
-    Ok((causes, conditional))
+    Ok(Selection {
+        causes,
+        members: chosen,
+        rounds: conditional,
+        nrmse,
+    })
 }
 
-/// The session with every trial's sensor force turned back into the rig frame from a
-/// sensor rotated by `angle_deg` (the reading is `R(θ) F`, so `F = R(−θ) reading`; the
-/// perturbation columns are the rig's command and stay).
-fn turned_back(session: &Session, angle_deg: f64) -> Session {
+/// The catalog's causes weighed against the library ([`super::unexplained`]), and
+/// what the library still finds given the causes that stand.
+///
+/// From the nominal balance, the library's terms are selected as any candidate; when
+/// together they gain more than the named causes together, each cause is judged again
+/// given the terms, and a cause that adds nothing then is rejected with the terms'
+/// law as the reason: the catalog entry nearest to an effect it lacks is not named
+/// (a cable carrier's spring is not a 95 mm "ripple"). Given the causes that stand,
+/// terms that still pass are the `unexplained` structure, with the law they fit and
+/// the residual's correlations.
+fn outside_the_catalog(
+    sel: &Selection,
+    ranked: &mut [(Ranked, CandidateFit)],
+    judge: &Judge<'_>,
+    folds: &Folds,
+) -> Result<(Vec<Cause>, Option<Unexplained>), DiscrepancyError> {
+    let lat = judge.latency_s;
+    let mut causes = sel.causes.clone();
+    let mut members = sel.members.clone();
+    if !causes.is_empty() {
+        let from_base = select_terms(&[], judge, folds)?;
+        let g_causes = 1.0 - sel.nrmse / judge.base_nrmse;
+        if !from_base.terms.is_empty() && from_base.gain() > g_causes {
+            let tm = from_base.members();
+            let base = cross_validate(
+                &grams_of(&Joint::given(tm.clone()), judge.signals, lat)?,
+                folds,
+                "the library's terms",
+            )?;
+            let cond = Judge {
+                base: &base,
+                base_nrmse: base.nrmse(),
+                ..*judge
+            };
+            let given: Vec<String> = tm.iter().map(|(t, _)| t.name().to_string()).collect();
+            let hint = hint_of(&from_base.found(lat));
+            let mut keep = Vec::new();
+            for (i, (c, _)) in members.iter().enumerate() {
+                let joint = Joint {
+                    fixed: tm.clone(),
+                    next: c.clone(),
+                };
+                let fit = cross_validate(&grams_of(&joint, judge.signals, lat)?, folds, c.name())?;
+                let r = cond.rank(&joint, &fit, &given)?;
+                if r.significant {
+                    keep.push(i);
+                    continue;
+                }
+                let why = format!(
+                    "explained better by laws outside the catalog: {hint} (held-out gain {:.1} % against the named causes' {:.1} %); given them it adds {:.1} % (t = {:.1})",
+                    100.0 * from_base.gain(),
+                    100.0 * g_causes,
+                    100.0 * r.gain,
+                    r.t_statistic
+                );
+                if let Some((row, _)) = ranked.iter_mut().find(|(row, _)| row.name == c.name()) {
+                    row.rejected.push(why);
+                    row.significant = false;
+                }
+            }
+            causes = keep.iter().map(|&i| causes[i].clone()).collect();
+            members = keep.iter().map(|&i| members[i].clone()).collect();
+        }
+    }
+    let left = select_terms(&members, judge, folds)?;
+    if left.terms.is_empty() {
+        return Ok((causes, None));
+    }
+    let terms = left.found(lat);
+    let correlations = residual_correlations(&members, judge, folds)?;
+    Ok((
+        causes,
+        Some(Unexplained {
+            balance: "cart".into(),
+            given: members.iter().map(|(c, _)| c.name().to_string()).collect(),
+            gain: left.gain(),
+            hint: hint_of(&terms),
+            terms,
+            correlations,
+        }),
+    ))
+}
+
+/// A person's sentence for the terms found.
+fn hint_of(terms: &[FoundTerm]) -> String {
+    terms
+        .iter()
+        .map(|t| format!("force on the carts ≈ {} ({})", t.law, t.meaning))
+        .collect::<Vec<_>>()
+        .join("; plus ")
+}
+
+/// Pearson correlation of the residual of `members` (fitted on all trials) with the
+/// state and forces of the carts, both axes' rows pooled, each signal less its trial
+/// mean (the offsets take every constant).
+fn residual_correlations(
+    members: &[Member],
+    judge: &Judge<'_>,
+    folds: &Folds,
+) -> Result<BTreeMap<String, f64>, DiscrepancyError> {
+    let lat = judge.latency_s;
+    let joint = Joint::given(members.to_vec());
+    let fit = cross_validate(
+        &grams_of(&joint, judge.signals, lat)?,
+        folds,
+        "the model so far",
+    )?;
+    const NAMES: [&str; 6] = [
+        "position",
+        "velocity",
+        "acceleration",
+        "sensor force",
+        "motor command",
+        "time in trial",
+    ];
+    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NAMES.len()];
+    for sig in judge.signals {
+        let res = joint.residual(sig, 0, &fit.beta, lat)?;
+        for (axis, e) in res.iter().enumerate() {
+            let time: Vec<f64> = sig.rows.iter().map(|&i| i as f64 / sig.rate_hz).collect();
+            let cols = [
+                sig.at_rows(&sig.q[axis]),
+                sig.at_rows(&sig.v[axis]),
+                sig.at_rows(&sig.a[axis]),
+                sig.at_rows(&sig.f[axis]),
+                sig.at_rows(&sig.u[axis]),
+                time,
+            ];
+            for (k, col) in cols.iter().enumerate() {
+                let m = col.iter().sum::<f64>() / col.len().max(1) as f64;
+                pairs[k].extend(col.iter().zip(e).map(|(x, r)| (x - m, *r)));
+            }
+        }
+    }
+    Ok(NAMES
+        .iter()
+        .zip(&pairs)
+        .map(|(n, p)| {
+            let (sxy, sxx, syy) = p.iter().fold((0.0, 0.0, 0.0), |(a, b, c), (x, y)| {
+                (a + x * y, b + x * x, c + y * y)
+            });
+            let r = if sxx > 0.0 && syy > 0.0 {
+                sxy / (sxx * syy).sqrt()
+            } else {
+                0.0
+            };
+            (n.to_string(), r)
+        })
+        .collect())
+}
+
+/// What forward selection named on the cart balance.
+struct Selection {
+    /// The causes in the order named, parameters from the last joint fit.
+    causes: Vec<Cause>,
+    /// The same as members of the joint model, each at its setting.
+    members: Vec<Member>,
+    /// Every later round's rows.
+    rounds: Vec<Ranked>,
+    /// Held-out NRMSE of the joint model of all causes (the baseline's when none).
+    nrmse: f64,
+}
+
+/// Terms of the library ([`super::unexplained`]) selected forward on top of `start`:
+/// in each round every term not yet chosen is fitted jointly with `start` and the
+/// terms chosen so far and judged against them alone by `judge`'s rules, and must make
+/// at least [`FORCE_RESOLUTION_N`] somewhere in the session; the best that passes
+/// enters, at most [`MAX_TERMS`].
+fn select_terms(
+    start: &[Member],
+    judge: &Judge<'_>,
+    folds: &Folds,
+) -> Result<TermSelection, DiscrepancyError> {
+    let lat = judge.latency_s;
+    let base_cv = |members: &[Member]| {
+        cross_validate(
+            &grams_of(&Joint::given(members.to_vec()), judge.signals, lat)?,
+            folds,
+            "the model so far",
+        )
+    };
+    let start_fit = base_cv(start)?;
+    let start_nrmse = start_fit.nrmse();
+    let mut sel = TermSelection {
+        terms: Vec::new(),
+        start_nrmse,
+        nrmse: start_nrmse,
+        fit: None,
+    };
+    let mut members = start.to_vec();
+    let mut base = start_fit;
+    for _ in 0..MAX_TERMS {
+        let cond = Judge {
+            base: &base,
+            base_nrmse: base.nrmse(),
+            ..*judge
+        };
+        let given: Vec<String> = members.iter().map(|(c, _)| c.name().to_string()).collect();
+        let mut round: Vec<(Ranked, Term, Joint, CvFit)> = LIBRARY
+            .into_par_iter()
+            .filter(|t| sel.terms.iter().all(|(chosen, _)| chosen != t))
+            .map(|t| {
+                let joint = Joint {
+                    fixed: members.clone(),
+                    next: Arc::new(t),
+                };
+                let fit = cross_validate(&grams_of(&joint, judge.signals, lat)?, folds, t.name())?;
+                let mut r = cond.rank(&joint, &fit, &given)?;
+                let coef = [
+                    r.parameters.get("x").copied().unwrap_or(f64::NAN),
+                    r.parameters.get("y").copied().unwrap_or(f64::NAN),
+                ];
+                let peak = peak_force_n(t, coef, judge.signals)?;
+                if peak[0].max(peak[1]).is_nan() || peak[0].max(peak[1]) < FORCE_RESOLUTION_N {
+                    r.rejected.push(format!(
+                        "immaterial: at most {:.3} N on x, {:.3} N on y, below the rig's {FORCE_RESOLUTION_N} N",
+                        peak[0], peak[1]
+                    ));
+                    r.significant = false;
+                }
+                Ok((r, t, joint, fit))
+            })
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+        round.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        let Some((r, t, joint, fit)) = round.into_iter().find(|(r, ..)| r.significant) else {
+            break;
+        };
+        sel.nrmse = r.extended_nrmse;
+        sel.terms.push((t, r));
+        members.push((joint.next.clone(), 0));
+        base = base_cv(&members)?;
+        sel.fit = Some((joint, fit));
+    }
+    Ok(sel)
+}
+
+/// At most this many library terms enter a hint: a law of more terms is a fit, not a
+/// hint a person can check.
+const MAX_TERMS: usize = 3;
+
+/// The library terms selected on top of a model.
+struct TermSelection {
+    /// Each term with its row (its gain against the model before it).
+    terms: Vec<(Term, Ranked)>,
+    /// Held-out NRMSE of the model the selection started from.
+    start_nrmse: f64,
+    /// Held-out NRMSE with every term selected.
+    nrmse: f64,
+    /// The last joint fit (every term's coefficients from it).
+    fit: Option<(Joint, CvFit)>,
+}
+
+impl TermSelection {
+    /// Held-out gain of all terms together against the start.
+    fn gain(&self) -> f64 {
+        1.0 - self.nrmse / self.start_nrmse
+    }
+
+    /// The terms as members (for joint fits).
+    fn members(&self) -> Vec<Member> {
+        self.terms
+            .iter()
+            .map(|(t, _)| (Arc::new(*t) as Arc<dyn Candidate>, 0))
+            .collect()
+    }
+
+    /// Each term's law with its force coefficients per axis and their jackknife
+    /// errors, from the last joint fit.
+    fn found(&self, lat: f64) -> Vec<FoundTerm> {
+        let Some((joint, fit)) = &self.fit else {
+            return Vec::new();
+        };
+        let k0 = joint.fixed.len() + 1 - self.terms.len();
+        let all = joint.member_parameters(fit.setting, &fit.beta, lat);
+        let per_fold: Vec<Vec<MemberParameters>> = fit
+            .folds
+            .iter()
+            .map(|f| joint.member_parameters(f.setting, &f.beta, lat))
+            .collect();
+        self.terms
+            .iter()
+            .enumerate()
+            .map(|(i, (t, r))| {
+                let fp: Vec<Vec<(String, f64)>> =
+                    per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
+                let (p, se) = params_with_se(all[k0 + i].1.clone(), &fp);
+                let g = |m: &BTreeMap<String, f64>, k: &str| m.get(k).copied().unwrap_or(f64::NAN);
+                FoundTerm {
+                    term: t.name().to_string(),
+                    law: format!(
+                        "{:.4} {u} · {} on x, {:.4} {u} · {} on y",
+                        g(&p, "x"),
+                        t.expression("x"),
+                        g(&p, "y"),
+                        t.expression("y"),
+                        u = t.unit()
+                    ),
+                    unit: t.unit().to_string(),
+                    coefficient_x: g(&p, "x"),
+                    coefficient_y: g(&p, "y"),
+                    se_x: g(&se, "x"),
+                    se_y: g(&se, "y"),
+                    gain: r.gain,
+                    meaning: t.meaning().to_string(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// Every trial's sensor force turned back into the rig frame from a sensor rotated by
+/// `angle_deg` (the reading is `R(θ) F`, so `F = R(−θ) reading`; the perturbation
+/// columns are the rig's command and stay).
+fn turn_back(session: &mut Session, angle_deg: f64) {
     let (sn, cs) = angle_deg.to_radians().sin_cos();
-    let mut s = session.clone();
-    for t in &mut s.trials {
+    for t in &mut session.trials {
         for (fx, fy) in t.fx_n.iter_mut().zip(t.fy_n.iter_mut()) {
             (*fx, *fy) = (cs * *fx + sn * *fy, cs * *fy - sn * *fx);
         }
     }
-    s
+}
+
+/// Every trial's sensor force with a first-order lag `tau_s` per axis undone:
+/// `F = F_read + τ dF_read/dt`, the rate from the balance's Savitzky–Golay window (a
+/// cubic over ~41 ms, so the inversion does not lift the noise above ~30 Hz).
+///
+/// # Errors
+/// A trial too short for the window or with a non-finite sample.
+fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError> {
+    let rate = session.manifest.rate_hz;
+    let window = super::signals::window_for_rate(rate);
+    for (entry, t) in session.manifest.trials.iter().zip(&mut session.trials) {
+        for (f, tau) in [&mut t.fx_n, &mut t.fy_n].into_iter().zip(tau_s) {
+            let rate_of = savgol_filter(
+                f,
+                window,
+                super::signals::SMOOTHING_ORDER,
+                1,
+                1.0 / rate,
+                EdgeMode::Interp,
+            )
+            .map_err(|source| DiscrepancyError::Signal {
+                trial: entry.id,
+                source,
+            })?;
+            for (v, d) in f.iter_mut().zip(rate_of) {
+                *v += tau * d;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Diagnoses a session: see the module docs.
@@ -557,6 +964,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_weighting_source: None,
         ranking: Vec::new(),
         conditional: Vec::new(),
+        unexplained: None,
         runner_up: None,
         threshold: None,
         not_judged: Vec::new(),
@@ -631,9 +1039,12 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             .map(|cf| Ok((judge.rank(cf.candidate.as_ref(), &cf.fit, &[])?, cf)))
             .collect::<Result<Vec<_>, DiscrepancyError>>()?;
         plant_ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
-        let (named, conditional) = forward_select(&plant_ranked, &judge, &folds)?;
-        plant_named = named;
-        d.conditional = conditional;
+        let selection = forward_select(&plant_ranked, &judge, &folds)?;
+        d.conditional = selection.rounds.clone();
+        let (kept, unexplained) =
+            outside_the_catalog(&selection, &mut plant_ranked, &judge, &folds)?;
+        plant_named = kept;
+        d.unexplained = unexplained;
         d.baseline_nrmse = Some(base_nrmse);
         baseline_fit = Some(baseline);
     } else {
@@ -651,15 +1062,36 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
 
     // ---- the hand balance (human side) ----
-    // A rotated sensor turns the hand's force too: with a rotation named on the cart
-    // balance, the hand balance judges the reading turned back by its angle.
-    let mut turned_deg = None;
-    if let Some(c) = plant_named.iter().find(|c| c.name == "sensor-rotation")
-        && let Some(&angle) = c.parameters.get("angle_deg")
-        && hand.is_ok()
-    {
-        hand = judge_hand(&turned_back(session, angle), opts.folds)?;
-        turned_deg = Some(angle);
+    // The sensor reads the hand's force too: with a rotation named on the cart balance,
+    // or a lag of the reading found there outside the catalog, the hand balance judges
+    // the reading turned back and its lag undone.
+    let angle = plant_named
+        .iter()
+        .find(|c| c.name == "sensor-rotation")
+        .and_then(|c| c.parameters.get("angle_deg").copied());
+    let lag = d.unexplained.as_ref().and_then(|u| {
+        u.terms
+            .iter()
+            .find(|t| t.term == Term::ForceRate.name())
+            .map(|t| [t.coefficient_x, t.coefficient_y])
+            .filter(|c| c.iter().all(|v| v.is_finite() && *v > 0.0))
+    });
+    let mut corrected = Vec::new();
+    if hand.is_ok() && (angle.is_some() || lag.is_some()) {
+        let mut s = session.clone();
+        if let Some(angle) = angle {
+            turn_back(&mut s, angle);
+            corrected.push(format!("turned back by the named rotation ({angle:.2}°)"));
+        }
+        if let Some(tau) = lag {
+            unlag(&mut s, tau)?;
+            corrected.push(format!(
+                "with the reading's lag found on the cart balance undone ({:.1} ms on x, {:.1} ms on y)",
+                tau[0] * 1e3,
+                tau[1] * 1e3
+            ));
+        }
+        hand = judge_hand(&s, opts.folds)?;
     }
     let mut hand_ranked: Vec<Ranked> = Vec::new();
     let mut hand_df = None;
@@ -774,7 +1206,12 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     d.gain = d.baseline_nrmse.map(|_| 0.0);
     // The plant's causes in the order of selection and the hand's best passing
     // candidate, the balance whose first cause gains more first.
-    let plant_first = plant_ranked.iter().map(|(r, _)| r).find(|r| r.significant);
+    let plant_first = plant_named.first().and_then(|c| {
+        plant_ranked
+            .iter()
+            .map(|(r, _)| r)
+            .find(|r| r.name == c.name)
+    });
     let hand_first = hand_ranked.iter().find(|r| r.significant);
     let hand_named: Vec<Cause> = hand_first.map(Cause::of).into_iter().collect();
     let plant_leads = match (plant_first, hand_first) {
@@ -822,8 +1259,13 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                  and its held-out gain is at least {:.0} %, and it passes the physical checks: physical signs, \
                  parameters material in newtons (at least {} N of force over the session, or the table of \
                  hil/src/discrepancy/decide.rs), not at the edge of their search range, and for friction and ripple \
-                 a fitted law that explains at least {:.0} % of its binned partial residual. The best passing \
-                 candidate of each balance is named, strongest first",
+                 a fitted law that explains at least {:.0} % of its binned partial residual. On the cart \
+                 balance effects are selected forward: the best passing candidate is named, then each \
+                 other one is fitted jointly with the named ones and judged against them alone by the \
+                 same rules, until none passes; on the hand balance the best passing candidate is named. \
+                 Laws outside the catalog (the library of hil/src/discrepancy/unexplained.rs) compete on the \
+                 cart balance: a cause they explain better and to which it adds nothing given them is \
+                 rejected, and what they still explain given the causes is reported as unexplained",
                 opts.alpha,
                 alpha_each,
                 match (hand_df, hand_t) {
@@ -837,9 +1279,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         });
     }
     d.evidence = evidence(&d, &ranking, cart_nrmse, hand.as_ref());
-    if let Some(angle) = turned_deg {
+    if !corrected.is_empty() {
         d.evidence.push(format!(
-            "the hand balance judged the sensor force turned back by the named rotation ({angle:.2}°)"
+            "the hand balance judged the sensor force {}",
+            corrected.join(", ")
         ));
     }
     if !plant_ok {

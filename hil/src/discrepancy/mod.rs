@@ -6,6 +6,7 @@
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
+//! | `unexplained.rs` | the library of force laws outside the catalog ([`Term`]) for what the catalog leaves |
 //! | `joint.rs` | forward selection's joint model: named effects at their settings plus one more ([`Joint`]) |
 //! | `hand_signals.rs` | the variational response to each force pulse, against aligned unperturbed trials |
 //! | `hand.rs` | the hand balance and the human-side catalog effects ([`HandCandidate`]) |
@@ -42,6 +43,7 @@ mod rotation;
 mod signals;
 pub mod stats;
 mod subject_fit;
+mod unexplained;
 
 pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
 pub use candidate::{
@@ -51,8 +53,8 @@ pub use candidate::{
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
 pub use diagnose::{
-    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, HUMAN_SIDE, NotJudged, PLANT_SIDE,
-    Ranked, Threshold, diagnose,
+    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, FoundTerm, HUMAN_SIDE, NotJudged,
+    PLANT_SIDE, Ranked, Threshold, Unexplained, diagnose,
 };
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITY_STEPS, smooth_velocity_m_per_s};
@@ -80,3 +82,4 @@ pub use signals::{
 pub use subject_fit::{
     FitOptions, FitResidual, SubjectFit, fit_subject, fit_trials, travel_times_s,
 };
+pub use unexplained::{LIBRARY, Term};

@@ -132,6 +132,37 @@ pub fn table(d: &Diagnosis) -> String {
         }
         let _ = writeln!(out);
     }
+    if !d.conditional.is_empty() {
+        let _ = writeln!(
+            out,
+            "forward selection on the cart balance: each candidate fitted jointly with the causes named before it, its gain against them alone"
+        );
+        for r in &d.conditional {
+            let verdict = if d
+                .causes
+                .iter()
+                .any(|c| c.name == r.name && c.given == r.given)
+            {
+                "CAUSE"
+            } else if r.t_statistic > 0.0 && r.gain > 0.0 && !r.rejected.is_empty() {
+                "rejected"
+            } else {
+                "-"
+            };
+            let _ = writeln!(
+                out,
+                "  given {:<30} {:<16} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
+                r.given.join(" + "),
+                r.name,
+                100.0 * r.gain,
+                r.extended_nrmse,
+                r.t_statistic,
+                verdict,
+                fmt_params(&r.parameters, &r.parameter_se)
+            );
+        }
+        let _ = writeln!(out);
+    }
     if d.causes.len() > 1 {
         let _ = writeln!(
             out,
@@ -139,10 +170,15 @@ pub fn table(d: &Diagnosis) -> String {
             d.causes
                 .iter()
                 .map(|c| format!(
-                    "{} ({} balance, held-out gain {:.1} %: {})",
+                    "{} ({} balance, held-out gain {:.1} %{}: {})",
                     c.name,
                     c.balance,
                     100.0 * c.gain,
+                    if c.given.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" given {}", c.given.join(" + "))
+                    },
                     fmt_params(&c.parameters, &c.parameter_se)
                 ))
                 .collect::<Vec<_>>()
@@ -171,6 +207,26 @@ pub fn table(d: &Diagnosis) -> String {
         if let Some(text) = convention(&c.name) {
             let _ = writeln!(out, "convention: {}: {text}", c.name);
         }
+    }
+    if let Some(u) = &d.unexplained {
+        let mut corr: Vec<(&String, &f64)> = u.correlations.iter().collect();
+        corr.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        let _ = writeln!(
+            out,
+            "unexplained ({} balance{}): held-out gain {:.1} % from laws outside the catalog: {}; the residual correlates with {}",
+            u.balance,
+            if u.given.is_empty() {
+                String::new()
+            } else {
+                format!(", given {}", u.given.join(" + "))
+            },
+            100.0 * u.gain,
+            u.hint,
+            corr.iter()
+                .map(|(k, r)| format!("{k} {r:+.2}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     if let Some(t) = &d.threshold {
         let _ = writeln!(out, "rule: {}", t.rule);
