@@ -42,7 +42,8 @@ pub struct BandError {
     pub trials: usize,
 }
 
-fn band_power(freq_hz: &[f64], density: &[f64], band: [f64; 2]) -> f64 {
+/// `Σ S(f) Δf` over the bins of `[lo, hi)`.
+pub(super) fn band_power(freq_hz: &[f64], density: &[f64], band: [f64; 2]) -> f64 {
     let df = freq_hz.get(1).copied().unwrap_or(0.0) - freq_hz.first().copied().unwrap_or(0.0);
     freq_hz
         .iter()

@@ -44,6 +44,7 @@ use std::sync::Arc;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::bands::{BANDS_HZ, band_power};
 use super::candidate::{Baseline, Candidate};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
@@ -61,7 +62,7 @@ use super::signals::BalanceSignals;
 use super::stats::{jackknife_se, mean_sd, student_t_critical};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
 use crate::session::Session;
-use rigtwin_device::signal::{EdgeMode, savgol_filter};
+use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
 
 /// Catalog effects judged from the hand balance (the response to the force pulses).
 pub const HUMAN_SIDE: [&str; 3] = ["stretch-reflex", "grip-compliance", "handle-mass"];
@@ -203,6 +204,9 @@ pub struct Unexplained {
     /// Correlation of the residual (without the terms) with the carts' position,
     /// velocity, acceleration, sensor force, motor command and time in the trial.
     pub correlations: BTreeMap<String, f64>,
+    /// Share of the residual's power (without the terms) in each band of
+    /// [`super::BANDS_HZ`] (`"0-2 Hz"`, ...), Welch over every trial and axis.
+    pub band_shares: BTreeMap<String, f64>,
     /// A sentence: the law the terms fit and what it hints at.
     pub hint: String,
 }
@@ -639,7 +643,7 @@ fn outside_the_catalog(
         return Ok((causes, None));
     }
     let terms = left.found(lat);
-    let correlations = residual_correlations(&members, judge, folds)?;
+    let (correlations, band_shares) = residual_structure(&members, judge, folds)?;
     Ok((
         causes,
         Some(Unexplained {
@@ -649,6 +653,7 @@ fn outside_the_catalog(
             hint: hint_of(&terms),
             terms,
             correlations,
+            band_shares,
         }),
     ))
 }
@@ -662,14 +667,15 @@ fn hint_of(terms: &[FoundTerm]) -> String {
         .join("; plus ")
 }
 
-/// Pearson correlation of the residual of `members` (fitted on all trials) with the
-/// state and forces of the carts, both axes' rows pooled, each signal less its trial
-/// mean (the offsets take every constant).
-fn residual_correlations(
+/// Where the residual of `members` (fitted on all trials) lives: its Pearson
+/// correlation with the state and forces of the carts, both axes' rows pooled, each
+/// signal less its trial mean (the offsets take every constant); and the share of its
+/// power in each band of [`BANDS_HZ`] (Welch at the evaluation rate, 1 s segments).
+fn residual_structure(
     members: &[Member],
     judge: &Judge<'_>,
     folds: &Folds,
-) -> Result<BTreeMap<String, f64>, DiscrepancyError> {
+) -> Result<(BTreeMap<String, f64>, BTreeMap<String, f64>), DiscrepancyError> {
     let lat = judge.latency_s;
     let joint = Joint::given(members.to_vec());
     let fit = cross_validate(
@@ -686,9 +692,16 @@ fn residual_correlations(
         "time in trial",
     ];
     let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NAMES.len()];
+    let mut bands = [0.0_f64; BANDS_HZ.len()];
     for sig in judge.signals {
         let res = joint.residual(sig, 0, &fit.beta, lat)?;
         for (axis, e) in res.iter().enumerate() {
+            let fs = sig.rate_hz / sig.decim as f64;
+            if let Ok(psd) = welch(e, fs, (fs.round() as usize).min(e.len())) {
+                for (b, band) in bands.iter_mut().zip(BANDS_HZ) {
+                    *b += band_power(&psd.freq_hz, &psd.density, band);
+                }
+            }
             let time: Vec<f64> = sig.rows.iter().map(|&i| i as f64 / sig.rate_hz).collect();
             let cols = [
                 sig.at_rows(&sig.q[axis]),
@@ -704,7 +717,18 @@ fn residual_correlations(
             }
         }
     }
-    Ok(NAMES
+    let total: f64 = bands.iter().sum();
+    let shares = BANDS_HZ
+        .iter()
+        .zip(bands)
+        .map(|(band, p)| {
+            (
+                format!("{}-{} Hz", band[0], band[1]),
+                if total > 0.0 { p / total } else { 0.0 },
+            )
+        })
+        .collect();
+    let corr = NAMES
         .iter()
         .zip(&pairs)
         .map(|(n, p)| {
@@ -718,7 +742,8 @@ fn residual_correlations(
             };
             (n.to_string(), r)
         })
-        .collect())
+        .collect();
+    Ok((corr, shares))
 }
 
 /// What forward selection named on the cart balance.

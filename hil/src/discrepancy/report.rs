@@ -213,7 +213,7 @@ pub fn table(d: &Diagnosis) -> String {
         corr.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
         let _ = writeln!(
             out,
-            "unexplained ({} balance{}): held-out gain {:.1} % from laws outside the catalog: {}; the residual correlates with {}",
+            "unexplained ({} balance{}): held-out gain {:.1} % from laws outside the catalog: {}; the residual correlates with {}; its power by band: {}",
             u.balance,
             if u.given.is_empty() {
                 String::new()
@@ -224,6 +224,11 @@ pub fn table(d: &Diagnosis) -> String {
             u.hint,
             corr.iter()
                 .map(|(k, r)| format!("{k} {r:+.2}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            u.band_shares
+                .iter()
+                .map(|(k, v)| format!("{k} {:.0} %", 100.0 * v))
                 .collect::<Vec<_>>()
                 .join(", ")
         );
