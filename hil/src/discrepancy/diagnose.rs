@@ -667,6 +667,9 @@ fn hint_of(terms: &[FoundTerm]) -> String {
         .join("; plus ")
 }
 
+/// Values by name (a signal, a band).
+type ByName = BTreeMap<String, f64>;
+
 /// Where the residual of `members` (fitted on all trials) lives: its Pearson
 /// correlation with the state and forces of the carts, both axes' rows pooled, each
 /// signal less its trial mean (the offsets take every constant); and the share of its
@@ -675,7 +678,7 @@ fn residual_structure(
     members: &[Member],
     judge: &Judge<'_>,
     folds: &Folds,
-) -> Result<(BTreeMap<String, f64>, BTreeMap<String, f64>), DiscrepancyError> {
+) -> Result<(ByName, ByName), DiscrepancyError> {
     let lat = judge.latency_s;
     let joint = Joint::given(members.to_vec());
     let fit = cross_validate(
