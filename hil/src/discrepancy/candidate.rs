@@ -69,8 +69,8 @@ pub trait Candidate: Designed + Sync + Send {
         Reshape::Nothing
     }
     /// One trial's Gram for every setting, joined to `base` (effects already named,
-    /// each at its setting: [`Design::joined`]), for forward selection. The default
-    /// joins each setting's [`Design`]; ripple and rotation run their fast paths with
+    /// each at its setting: `Design::joined`), for forward selection. The default
+    /// joins each setting's `Design`; ripple and rotation run their fast paths with
     /// `base`'s regressors carried along.
     ///
     /// # Errors

@@ -43,7 +43,7 @@ mod rotation;
 mod signals;
 pub mod stats;
 mod subject_fit;
-mod unexplained;
+pub mod unexplained;
 
 pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
 pub use candidate::{
