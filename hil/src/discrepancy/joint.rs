@@ -229,7 +229,7 @@ mod tests {
     use std::f64::consts::TAU;
 
     use super::*;
-    use crate::discrepancy::candidate::tests::logged_trial;
+    use crate::discrepancy::candidate::tests::simulate_carts;
     use crate::discrepancy::delay::ActuationDelay;
     use crate::discrepancy::friction::RailFriction;
     use crate::discrepancy::ripple::ForceRipple;
@@ -255,12 +255,8 @@ mod tests {
         angle_deg: f64,
         cog: bool,
     ) -> (crate::session::TrialEntry, crate::session::Trial) {
-        let ticks = 16_000;
-        let (mut x, mut v) = ([0.0; 2], [0.0; 2]);
         let (sn, cs) = angle_deg.to_radians().sin_cos();
-        let mut rows = Vec::new();
-        let mut sum = [0.0; 6];
-        for k in 0..ticks {
+        simulate_carts(16_000, |k, x, v| {
             let t = k as f64 * TICK_S;
             let goal = [
                 0.06 * (TAU * 0.5 * t + seed).sin(),
@@ -270,29 +266,19 @@ mod tests {
                 1.5 * (TAU * 1.3 * t + seed).sin(),
                 1.0 * (TAU * 0.9 * t).cos(),
             ];
-            let cmd: [f64; 2] =
-                std::array::from_fn(|a| 400.0 * (goal[a] - x[a]) - 60.0 * v[a] * MASS_KG[a] / 4.0);
+            let cmd = std::array::from_fn(|a| 400.0 * (goal[a] - x[a]) - 15.0 * v[a] * MASS_KG[a]);
             let read = [cs * hand[0] - sn * hand[1], sn * hand[0] + cs * hand[1]];
-            let logged = [x[0], x[1], read[0], read[1], cmd[0], cmd[1]];
-            for (s, l) in sum.iter_mut().zip(logged) {
-                *s += l / 4.0;
-            }
-            if k % 4 == 3 {
-                rows.push(sum);
-                sum = [0.0; 6];
-            }
-            for a in 0..2 {
+            let other = std::array::from_fn(|a| {
                 let friction = COULOMB_N * (v[a] / KNEE_M_PER_S).tanh() + VISCOUS_N_S_PER_M * v[a];
                 let cog = if cog {
                     AMPLITUDE_N[a] * (TAU * x[a] / PITCH_M + PHASE_RAD[a]).sin()
                 } else {
                     0.0
                 };
-                v[a] += (cmd[a] + hand[a] + cog - friction) / MASS_KG[a] * TICK_S;
-                x[a] += v[a] * TICK_S;
-            }
-        }
-        logged_trial(&rows)
+                hand[a] + cog - friction
+            });
+            [read, cmd, other]
+        })
     }
 
     fn signals(angle_deg: f64, cog: bool) -> Vec<BalanceSignals> {

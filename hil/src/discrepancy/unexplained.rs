@@ -224,12 +224,11 @@ mod tests {
 
     use super::*;
     use crate::discrepancy::NUISANCE_COLUMNS;
-    use crate::discrepancy::candidate::tests::logged_trial;
+    use crate::discrepancy::candidate::tests::simulate_carts;
     use crate::discrepancy::gram::Gram;
     use crate::discrepancy::joint::Joint;
 
     const TICK_S: f64 = 2.5e-4;
-    const MASS_KG: [f64; 2] = [12.0, 4.0];
     const SPRING_N_PER_M: [f64; 2] = [40.0, 25.0];
     const LAG_S: f64 = 0.008;
 
@@ -238,11 +237,9 @@ mod tests {
     /// hand force through a first-order low-pass of time constant 8 ms (exact
     /// discretisation). Logged at 1 kHz as 4-tick means.
     fn trial(seed: f64) -> BalanceSignals {
-        let (mut x, mut v, mut read) = ([0.0; 2], [0.0; 2], [0.0; 2]);
         let alpha = 1.0 - (-TICK_S / LAG_S).exp();
-        let mut rows = Vec::new();
-        let mut sum = [0.0; 6];
-        for k in 0..16_000 {
+        let mut read = [0.0; 2];
+        let (e, t) = simulate_carts(16_000, |k, x, v| {
             let t = k as f64 * TICK_S;
             let goal = [
                 0.04 * (TAU * 0.4 * t + seed).sin(),
@@ -252,25 +249,13 @@ mod tests {
                 3.0 * (TAU * 2.3 * t + seed).sin(),
                 2.0 * (TAU * 3.1 * t).cos(),
             ];
-            let cmd: [f64; 2] = std::array::from_fn(|a| 300.0 * (goal[a] - x[a]) - 40.0 * v[a]);
             for a in 0..2 {
                 read[a] += alpha * (hand[a] - read[a]);
             }
-            let logged = [x[0], x[1], read[0], read[1], cmd[0], cmd[1]];
-            for (s, l) in sum.iter_mut().zip(logged) {
-                *s += l / 4.0;
-            }
-            if k % 4 == 3 {
-                rows.push(sum);
-                sum = [0.0; 6];
-            }
-            for a in 0..2 {
-                let spring = -SPRING_N_PER_M[a] * (x[a] - 0.01);
-                v[a] += (cmd[a] + hand[a] + spring) / MASS_KG[a] * TICK_S;
-                x[a] += v[a] * TICK_S;
-            }
-        }
-        let (e, t) = logged_trial(&rows);
+            let cmd = std::array::from_fn(|a| 300.0 * (goal[a] - x[a]) - 40.0 * v[a]);
+            let other = std::array::from_fn(|a| hand[a] - SPRING_N_PER_M[a] * (x[a] - 0.01));
+            [read, cmd, other]
+        });
         BalanceSignals::from_trial(&e, &t, 1000.0).unwrap().unwrap()
     }
 
