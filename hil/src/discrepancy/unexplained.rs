@@ -10,12 +10,17 @@
 //! | `position-squared` | `c · q_i²` | N/m² | a spring that stiffens or a pull that is not linear |
 //! | `velocity-squared` | `c · v_i |v_i|` | N s²/m² | drag growing with the square of the speed |
 //! | `force-rate` | `c · dF_i/dt` (the sensor reading's rate) | s | a sensor whose reading lags the force: a first-order low-pass of time constant `τ` reads `F − τ dF/dt`, so `c ≈ τ` |
-//! | `force` | `c · F_i` | 1 | a sensor gain beyond the motor's tolerance |
 //! | `trial-time` | `c · t` (time since the trial's start) | N/s | a drift within each trial |
 //!
 //! None is a catalog law: friction's `tanh` and viscous terms, a ripple's sinusoids, a
 //! delayed command and the other axis's force (a rotation) are the catalog's, so a
-//! term that explains the residual is a finding the catalog cannot make. Every column
+//! term that explains the residual is a finding the catalog cannot make. A sensor gain
+//! `c · F` is not in the library: during a reach `u ≈ −F`, so it trades off with the
+//! motor gains the baseline holds within their tolerance and with the masses; in the
+//! library it took up what the bound left on 5 of 20 effect-free realistic sessions
+//! (coefficients −0.10 on both axes) and on 4 of the false-alarm sweep's
+//! (seeds 2004, 2011, 2044, 2052). A gain beyond the tolerance shows as a baseline gain at its bound (the
+//! evidence says so). Every column
 //! that is a force of the state goes through the balance filter like the measured
 //! forces; the force rate is the derivative of the filtered reading.
 //!
@@ -41,19 +46,16 @@ pub enum Term {
     VelocitySquared,
     /// `c · dF/dt`.
     ForceRate,
-    /// `c · F`.
-    Force,
     /// `c · t`.
     TrialTime,
 }
 
 /// Every term of the library.
-pub const LIBRARY: [Term; 6] = [
+pub const LIBRARY: [Term; 5] = [
     Term::Position,
     Term::PositionSquared,
     Term::VelocitySquared,
     Term::ForceRate,
-    Term::Force,
     Term::TrialTime,
 ];
 
@@ -66,7 +68,6 @@ impl Term {
             Term::PositionSquared => "position-squared",
             Term::VelocitySquared => "velocity-squared",
             Term::ForceRate => "force-rate",
-            Term::Force => "force",
             Term::TrialTime => "trial-time",
         }
     }
@@ -79,7 +80,6 @@ impl Term {
             Term::PositionSquared => format!("{axis}²"),
             Term::VelocitySquared => format!("v{axis}·|v{axis}|"),
             Term::ForceRate => format!("dF{axis}/dt"),
-            Term::Force => format!("F{axis}"),
             Term::TrialTime => "t".to_string(),
         }
     }
@@ -92,7 +92,6 @@ impl Term {
             Term::PositionSquared => "N/m²",
             Term::VelocitySquared => "N s²/m²",
             Term::ForceRate => "s",
-            Term::Force => "",
             Term::TrialTime => "N/s",
         }
     }
@@ -109,7 +108,6 @@ impl Term {
             Term::ForceRate => {
                 "a sensor whose reading lags the force (a first-order low-pass of time constant τ gives a coefficient τ)"
             }
-            Term::Force => "a sensor gain error beyond the motor's tolerance",
             Term::TrialTime => "a drift within each trial",
         }
     }
@@ -137,7 +135,6 @@ impl Term {
                     })
                     .collect());
             }
-            Term::Force => return Ok(sig.at_rows(&sig.f[axis])),
             Term::TrialTime => {
                 return Ok(sig.rows.iter().map(|&i| i as f64 / sig.rate_hz).collect());
             }
