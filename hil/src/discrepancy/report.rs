@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::candidate::{Baseline, Candidate as _};
 use super::crossval::Folds;
-use super::diagnose::{Analysis, CandidateFit, Diagnosis};
+use super::diagnose::{Analysis, CandidateFit, Diagnosis, Ranked};
 use super::error::DiscrepancyError;
 use super::hand::{GRIP_TIME_S, HandBaseline, HandFit, HandJudgement, hand_fit_rows};
 use super::plots::{Drawn, Figure, Series, Style};
@@ -101,15 +101,7 @@ pub fn table(d: &Diagnosis) -> String {
             "rank", "candidate", "balance", "gain %", "NRMSE", "t", "verdict"
         );
         for (i, r) in d.ranking.iter().enumerate() {
-            let verdict = if d.causes.iter().any(|c| c.name == r.name) {
-                "CAUSE"
-            } else if r.significant {
-                "also"
-            } else if r.t_statistic > 0.0 && r.gain > 0.0 && !r.rejected.is_empty() {
-                "rejected"
-            } else {
-                "-"
-            };
+            let verdict = verdict(r, d.causes.iter().any(|c| c.name == r.name));
             let _ = writeln!(
                 out,
                 "{:<4} {:<16} {:<7} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
@@ -138,17 +130,12 @@ pub fn table(d: &Diagnosis) -> String {
             "forward selection on the cart balance: each candidate fitted jointly with the causes named before it, its gain against them alone"
         );
         for r in &d.conditional {
-            let verdict = if d
-                .causes
-                .iter()
-                .any(|c| c.name == r.name && c.given == r.given)
-            {
-                "CAUSE"
-            } else if r.t_statistic > 0.0 && r.gain > 0.0 && !r.rejected.is_empty() {
-                "rejected"
-            } else {
-                "-"
-            };
+            let verdict = verdict(
+                r,
+                d.causes
+                    .iter()
+                    .any(|c| c.name == r.name && c.given == r.given),
+            );
             let _ = writeln!(
                 out,
                 "  given {:<30} {:<16} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
@@ -240,6 +227,20 @@ pub fn table(d: &Diagnosis) -> String {
         let _ = writeln!(out, "not judged: {:<16} {}", n.effect, n.reason);
     }
     out
+}
+
+/// A ranked row's verdict in the table: `CAUSE` when `named`, `also` when it passed
+/// every test but another was named, `rejected` when it gained but failed a check.
+fn verdict(r: &Ranked, named: bool) -> &'static str {
+    if named {
+        "CAUSE"
+    } else if r.significant {
+        "also"
+    } else if r.t_statistic > 0.0 && r.gain > 0.0 && !r.rejected.is_empty() {
+        "rejected"
+    } else {
+        "-"
+    }
 }
 
 /// What a named effect's parameters mean where a sign, a frame or a unit could be read
