@@ -492,9 +492,10 @@ pub(super) mod tests {
     const MASS_KG: [f64; 2] = [12.0, 4.0];
 
     /// Carts of 12 and 4 kg integrated at 4 kHz (semi-implicit Euler, as the plant) for
-    /// `ticks` ticks; `tick(k, x, v)` gives the sensor's reading, the motor command and
-    /// every other force on the carts (hand and plant effects) at tick `k` from the
-    /// state at its start. Logged at 1 kHz as 4-tick block means, like the rigs.
+    /// `ticks` ticks; `tick(k, x, v)` gives the sensor's reading, the logged motor
+    /// command and the total force on the carts (motor as it acts, hand and plant
+    /// effects) at tick `k` from the state at its start. Logged at 1 kHz as 4-tick
+    /// block means, like the rigs.
     pub(in crate::discrepancy) fn simulate_carts(
         ticks: usize,
         mut tick: impl FnMut(usize, [f64; 2], [f64; 2]) -> [[f64; 2]; 3],
@@ -503,7 +504,7 @@ pub(super) mod tests {
         let mut rows = Vec::new();
         let mut sum = [0.0; 6];
         for k in 0..ticks {
-            let [read, cmd, other] = tick(k, x, v);
+            let [read, cmd, force] = tick(k, x, v);
             let logged = [x[0], x[1], read[0], read[1], cmd[0], cmd[1]];
             for (s, l) in sum.iter_mut().zip(logged) {
                 *s += l / 4.0;
@@ -513,7 +514,7 @@ pub(super) mod tests {
                 sum = [0.0; 6];
             }
             for a in 0..2 {
-                v[a] += (cmd[a] + other[a]) / MASS_KG[a] * TICK_S;
+                v[a] += force[a] / MASS_KG[a] * TICK_S;
                 x[a] += v[a] * TICK_S;
             }
         }
@@ -575,30 +576,15 @@ pub(super) mod tests {
                 1.5 * (TAU * 2.0 * t(k)).cos(),
             ]
         };
-        let (mut x, mut v) = ([0.0; 2], [0.0; 2]);
-        let mut rows: Vec<[f64; 6]> = Vec::new();
-        let mut sum = [0.0; 6];
-        for k in 0..ticks {
+        simulate_carts(ticks, |k, _, _| {
             let f = hand(k);
             let motor = if k >= delay_ticks {
                 cmd[k - delay_ticks]
             } else {
                 [0.0; 2]
             };
-            let logged = [x[0], x[1], f[0], f[1], cmd[k][0], cmd[k][1]];
-            for (s, l) in sum.iter_mut().zip(logged) {
-                *s += l / 4.0;
-            }
-            if k % 4 == 3 {
-                rows.push(sum);
-                sum = [0.0; 6];
-            }
-            for a in 0..2 {
-                v[a] += (motor[a] + f[a]) / MASS_KG[a] * TICK_S;
-                x[a] += v[a] * TICK_S;
-            }
-        }
-        logged_trial(&rows)
+            [f, cmd[k], std::array::from_fn(|a| motor[a] + f[a])]
+        })
     }
 
     fn nrmse(d: &Design, sig: &BalanceSignals) -> (f64, Vec<f64>) {

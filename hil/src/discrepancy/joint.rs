@@ -266,18 +266,19 @@ mod tests {
                 1.5 * (TAU * 1.3 * t + seed).sin(),
                 1.0 * (TAU * 0.9 * t).cos(),
             ];
-            let cmd = std::array::from_fn(|a| 400.0 * (goal[a] - x[a]) - 15.0 * v[a] * MASS_KG[a]);
+            let cmd: [f64; 2] =
+                std::array::from_fn(|a| 400.0 * (goal[a] - x[a]) - 15.0 * v[a] * MASS_KG[a]);
             let read = [cs * hand[0] - sn * hand[1], sn * hand[0] + cs * hand[1]];
-            let other = std::array::from_fn(|a| {
+            let force = std::array::from_fn(|a| {
                 let friction = COULOMB_N * (v[a] / KNEE_M_PER_S).tanh() + VISCOUS_N_S_PER_M * v[a];
                 let cog = if cog {
                     AMPLITUDE_N[a] * (TAU * x[a] / PITCH_M + PHASE_RAD[a]).sin()
                 } else {
                     0.0
                 };
-                hand[a] + cog - friction
+                cmd[a] + hand[a] + cog - friction
             });
-            [read, cmd, other]
+            [read, cmd, force]
         })
     }
 

@@ -186,7 +186,7 @@ impl Candidate for ForceRipple {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use crate::discrepancy::candidate::tests::logged_trial;
+    use crate::discrepancy::candidate::tests::simulate_carts;
     use crate::session::{Trial, TrialEntry};
 
     const TICK_S: f64 = 2.5e-4;
@@ -200,11 +200,7 @@ mod tests {
     /// world's cogging law added to the motor force but not to the logged command, and a
     /// slow hand force; logged at 1 kHz as 4-tick block means.
     fn cogged_trial() -> (TrialEntry, Trial) {
-        let ticks = 24_000;
-        let (mut x, mut v) = ([0.0; 2], [0.0; 2]);
-        let mut rows: Vec<[f64; 6]> = Vec::new();
-        let mut sum = [0.0; 6];
-        for k in 0..ticks {
+        simulate_carts(24_000, |k, x, v| {
             let t = k as f64 * TICK_S;
             // A position loop (5 Hz, damping 0.7) along `a (1 − cos ω t)`, with its feed
             // forward: the cogging moves the carts off the plan only by millimetres.
@@ -224,21 +220,12 @@ mod tests {
                 3.0 * (TAU * 0.7 * t + 0.4).sin(),
                 2.5 * (TAU * 1.3 * t).cos(),
             ];
-            let logged = [x[0], x[1], hand[0], hand[1], cmd[0], cmd[1]];
-            for (s, l) in sum.iter_mut().zip(logged) {
-                *s += l / 4.0;
-            }
-            if k % 4 == 3 {
-                rows.push(sum);
-                sum = [0.0; 6];
-            }
-            for a in 0..2 {
+            let force = std::array::from_fn(|a| {
                 let cog = AMPLITUDE_N[a] * (TAU * x[a] / PITCH_M + PHASE_RAD[a]).sin();
-                v[a] += (cmd[a] + hand[a] + cog) / MASS_KG[a] * TICK_S;
-                x[a] += v[a] * TICK_S;
-            }
-        }
-        logged_trial(&rows)
+                cmd[a] + hand[a] + cog
+            });
+            [hand, cmd, force]
+        })
     }
 
     /// Two motors whose tracks start at different positions, with different amplitudes:

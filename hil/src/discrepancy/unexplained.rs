@@ -249,9 +249,10 @@ mod tests {
             for a in 0..2 {
                 read[a] += alpha * (hand[a] - read[a]);
             }
-            let cmd = std::array::from_fn(|a| 300.0 * (goal[a] - x[a]) - 40.0 * v[a]);
-            let other = std::array::from_fn(|a| hand[a] - SPRING_N_PER_M[a] * (x[a] - 0.01));
-            [read, cmd, other]
+            let cmd: [f64; 2] = std::array::from_fn(|a| 300.0 * (goal[a] - x[a]) - 40.0 * v[a]);
+            let force =
+                std::array::from_fn(|a| cmd[a] + hand[a] - SPRING_N_PER_M[a] * (x[a] - 0.01));
+            [read, cmd, force]
         });
         BalanceSignals::from_trial(&e, &t, 1000.0).unwrap().unwrap()
     }
