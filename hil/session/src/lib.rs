@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 
 pub use error::SessionError;
 pub use manifest::{
-    Amplitude, Device, FORMAT, FORMAT_VERSION, Manifest, Percentiles, Perturbation,
+    Amplitude, Axes, Device, FORMAT, FORMAT_VERSION, Manifest, Percentiles, Perturbation,
     PerturbationKind, Sha256, SimInfo, Source, Subject, Timing, TrialEntry, TrialKind,
 };
 pub use table::{Column, OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Trial, time_tolerance_s};

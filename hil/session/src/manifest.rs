@@ -35,6 +35,43 @@ pub const FORMAT: &str = "rig-session";
 /// The only `format_version` this module reads and writes.
 pub const FORMAT_VERSION: i64 = 1;
 
+/// Which of the rig frame's axes a session's rig has: the optional top-level
+/// `axes = ["x"]` (an extension of version 1; both when absent, and readers of the spec
+/// ignore it). The columns of an axis the rig lacks are present and zero, so every
+/// reader of the spec still reads the tables; analyses judge only the axes listed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Axes {
+    /// A planar rig: `x` and `y`.
+    #[default]
+    Both,
+    /// One axis, along the rig frame's `x`.
+    X,
+    /// One axis, along the rig frame's `y`.
+    Y,
+}
+
+impl Axes {
+    /// Whether axis `i` (0 = x, 1 = y) is present.
+    #[must_use]
+    pub fn has(self, i: usize) -> bool {
+        match self {
+            Axes::Both => i < 2,
+            Axes::X => i == 0,
+            Axes::Y => i == 1,
+        }
+    }
+
+    /// The axes' names, as `axes` lists them.
+    #[must_use]
+    pub fn names(self) -> &'static [&'static str] {
+        match self {
+            Axes::Both => &["x", "y"],
+            Axes::X => &["x"],
+            Axes::Y => &["y"],
+        }
+    }
+}
+
 /// A parsed `session.toml`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Manifest {
@@ -42,6 +79,9 @@ pub struct Manifest {
     pub source: Source,
     /// Sampling rate of every trial table, Hz (> 0).
     pub rate_hz: f64,
+    /// `axes`: which axes the rig has (optional; both when absent). A one-axis rig (a
+    /// linear servo stage) writes its other axis's columns as zeros.
+    pub axes: Axes,
     /// When the session was recorded, as written (RFC 3339 in practice). Passed in by
     /// the writer, never read from the clock, so output is deterministic.
     pub created: String,

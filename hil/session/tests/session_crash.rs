@@ -15,7 +15,7 @@ use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 use rigtwin_session::{
-    Channels, Device, Manifest, Sample, Session, SessionWriter, Source, Subject, TrialKind,
+    Axes, Channels, Device, Manifest, Sample, Session, SessionWriter, Source, Subject, TrialKind,
     TrialMeta,
 };
 
@@ -41,6 +41,7 @@ fn header() -> Manifest {
     Manifest {
         source: Source::Sim,
         rate_hz: RATE_HZ,
+        axes: Axes::Both,
         created: "2026-11-22T00:00:00Z".into(),
         device: Device {
             kind: "admittance".into(),

@@ -480,3 +480,35 @@ fn comments_reordered_columns_crlf_and_unknown_columns_still_read() {
         e => panic!("{e:?}"),
     }
 }
+
+/// `axes` is optional: a one-axis rig lists its axis, the manifest writes it back, and a
+/// list that is not one of the three is an error at its line.
+#[test]
+fn axes_are_optional_round_trip_and_bad_lists_are_named() {
+    use rigtwin_session::{Axes, Manifest};
+    let d = copy();
+    assert_eq!(Session::read(d.path()).unwrap().manifest.axes, Axes::Both);
+    edit(&manifest(&d), |t| {
+        t.replace("rate_hz = 1000.0", "rate_hz = 1000.0\naxes = [\"x\"]")
+    });
+    let m = Session::read(d.path()).unwrap().manifest;
+    assert_eq!(m.axes, Axes::X);
+    assert!(m.axes.has(0) && !m.axes.has(1));
+    let again = Manifest::from_toml(&m.to_toml(), Path::new("again.toml")).unwrap();
+    assert_eq!(again, m, "axes must survive a write and a read");
+    for bad in ["[\"z\"]", "[]", "[\"x\", \"x\"]", "[\"y\", \"x\"]"] {
+        let d = copy();
+        edit(&manifest(&d), |t| {
+            t.replace(
+                "rate_hz = 1000.0",
+                &format!("rate_hz = 1000.0\naxes = {bad}"),
+            )
+        });
+        match read_err(&d) {
+            SessionError::InvalidValue { line, field, .. } => {
+                assert_eq!((line, field.as_str()), (5, "axes"), "{bad}")
+            }
+            e => panic!("{bad}: {e:?}"),
+        }
+    }
+}

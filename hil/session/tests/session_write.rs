@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use rigtwin_device::{ErrorKind, MotorCommand, RigIo, RigIoError, Tick};
 use rigtwin_session::replay::{Interpolation, ReplayError, ReplayRig};
 use rigtwin_session::{
-    Channels, Device, Manifest, Sample, Session, SessionError, SessionWriter, SimInfo, Source,
-    Subject, Trial, TrialKind, TrialMeta,
+    Axes, Channels, Device, Manifest, Sample, Session, SessionError, SessionWriter, SimInfo,
+    Source, Subject, Trial, TrialKind, TrialMeta,
 };
 
 fn shared(name: &str) -> PathBuf {
@@ -102,6 +102,7 @@ fn header(rate_hz: f64) -> Manifest {
     Manifest {
         source: Source::Sim,
         rate_hz,
+        axes: Axes::Both,
         created: "2026-11-22T00:00:00Z".into(),
         device: Device {
             kind: "admittance".into(),

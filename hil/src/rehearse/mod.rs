@@ -43,8 +43,9 @@ use rigtwin_device::config::LawKind;
 use crate::cosim::WallClock;
 use crate::protocol::{Protocol, ProtocolKind, VirtualSubject};
 use crate::session::{
-    Amplitude, Device, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind, SessionError,
-    SessionWriter, SimInfo, Source, Subject, Timing, Trial, TrialEntry, TrialKind, TrialMeta,
+    Amplitude, Axes, Device, FORMAT_VERSION, Manifest, Perturbation, PerturbationKind,
+    SessionError, SessionWriter, SimInfo, Source, Subject, Timing, Trial, TrialEntry, TrialKind,
+    TrialMeta,
 };
 use record::{Block, Layout, ch};
 pub use trial::{Extremes, OnsetTruth, TrialPlan, TrialTask};
@@ -364,6 +365,7 @@ pub fn manifest(protocol: &Protocol, subject: &VirtualSubject, session_seed: u64
     Manifest {
         source: Source::Sim,
         rate_hz: f64::from(protocol.recording.rate_hz),
+        axes: Axes::Both,
         created: CREATED.to_owned(),
         device: Device {
             kind: kind.to_owned(),

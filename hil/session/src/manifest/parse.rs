@@ -23,6 +23,7 @@ struct RawManifest {
     _format_version: de::IgnoredAny,
     source: Spanned<String>,
     rate_hz: Positive,
+    axes: Option<Spanned<Vec<String>>>,
     created: Spanned<toml::Value>,
     device: RawDevice,
     subject: Subject,
@@ -327,6 +328,23 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<(Manifest, Vec<EntryLines
             ));
         }
     };
+    let axes = match &raw.axes {
+        None => Axes::Both,
+        Some(a) => {
+            let names: Vec<&str> = a.get_ref().iter().map(String::as_str).collect();
+            match names.as_slice() {
+                ["x", "y"] => Axes::Both,
+                ["x"] => Axes::X,
+                ["y"] => Axes::Y,
+                other => {
+                    return Err(loc.invalid(
+                        &a.span(),
+                        format!("expected [\"x\"], [\"y\"] or [\"x\", \"y\"], found {other:?}"),
+                    ));
+                }
+            }
+        }
+    };
     let device = Device {
         kind: raw.device.kind,
         mass_kg: positive2(raw.device.mass_kg),
@@ -365,6 +383,7 @@ pub(crate) fn parse(text: &str, file: &Path) -> Result<(Manifest, Vec<EntryLines
     let manifest = Manifest {
         source,
         rate_hz: raw.rate_hz.0,
+        axes,
         created,
         device,
         subject: raw.subject,

@@ -73,6 +73,10 @@ impl Manifest {
         let _ = writeln!(out, "format_version = {FORMAT_VERSION}");
         let _ = writeln!(out, "source = \"{}\"", self.source.as_str());
         let _ = writeln!(out, "rate_hz = {}", float(self.rate_hz));
+        if self.axes != Axes::Both {
+            let names: Vec<String> = self.axes.names().iter().map(|n| string(n)).collect();
+            let _ = writeln!(out, "axes = [{}]", names.join(", "));
+        }
         let _ = writeln!(out, "created = {}", string(&self.created));
         let d = &self.device;
         let _ = writeln!(out, "\n[device]");
