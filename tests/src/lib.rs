@@ -1,6 +1,7 @@
 //! End-to-end tests of rigtwin live in `tests/tests/`; shared helpers live here.
 
 pub mod generator;
+pub mod servo_axis;
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -35,6 +35,14 @@
 //! the catalog shares between the axes (friction, ripple, delay, rotation) are fitted
 //! once. The normaliser of the NRMSE is the motor command itself: the error is the
 //! error of predicting the force the motor had to make.
+//!
+//! A rig of one axis (`axes = ["x"]`, a linear servo stage) writes the other axis's
+//! columns as zeros: that axis contributes no rows, and its columns, which no row
+//! touches, are held at zero by [`Gram::solve`]. A rig without a handle force sensor
+//! has `F = 0`, so the balance holds only the command: its scale cannot be told from
+//! the masses, the force-gain column becomes a constant per axis for the whole session
+//! (the constant force the carriage is held against, [`BalanceSignals::nuisance`]),
+//! and rows near rest are left out (static friction, [`BalanceSignals::on_axes`]).
 
 use super::error::DiscrepancyError;
 use super::gram::{Gram, Intercepts};
@@ -160,7 +168,9 @@ pub fn gain_bounds(p: usize) -> Vec<(usize, f64, f64)> {
 
 /// `y − x·β` on the rows of both axes, with `x = [a·[axis = x], a·[axis = y], extra…,
 /// u·[axis = x], u·[axis = y]]`, less its mean on each axis (the trial's sensor offsets
-/// at their least-squares values).
+/// at their least-squares values); without a force sensor the nuisance columns are the
+/// session's constants and nothing more is taken off ([`BalanceSignals::nuisance`]);
+/// an axis the rig lacks is zero.
 pub fn residual_rows(
     sig: &BalanceSignals,
     targets: &[Vec<f64>; 2],
@@ -182,12 +192,16 @@ pub fn residual_rows(
                 if p > 2 + NUISANCE_COLUMNS {
                     extra(axis, r, &mut x[2..p - NUISANCE_COLUMNS]);
                 }
-                x[p - NUISANCE_COLUMNS + axis] = gains[axis][r];
+                x[p - NUISANCE_COLUMNS + axis] = sig.nuisance(gains[axis][r]);
                 y - x.iter().zip(beta).map(|(a, b)| a * b).sum::<f64>()
             })
             .collect();
-        let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
-        e.iter_mut().for_each(|v| *v -= mean);
+        if !sig.present(axis) {
+            e.iter_mut().for_each(|v| *v = 0.0);
+        } else if sig.per_trial_offsets() {
+            let mean = e.iter().sum::<f64>() / e.len().max(1) as f64;
+            e.iter_mut().for_each(|v| *v -= mean);
+        }
         e
     })
 }
@@ -221,18 +235,23 @@ pub fn push_rows(
     g.bounds = gain_bounds(p);
     let mut x = vec![0.0; p];
     let mut ic = Intercepts::new(2, p);
-    for axis in 0..2 {
+    if !sig.per_trial_offsets() {
+        g.bounds.clear();
+    }
+    for axis in (0..2).filter(|a| sig.present(*a)) {
         let a = sig.at_rows(&sig.a[axis]);
         for (r, ((acc, y), n)) in a.iter().zip(&targets[axis]).zip(&norms[axis]).enumerate() {
             x.iter_mut().for_each(|v| *v = 0.0);
             x[axis] = *acc;
             extra(axis, r, &mut x[2..p - NUISANCE_COLUMNS]);
-            x[p - NUISANCE_COLUMNS + axis] = gains[axis][r];
+            x[p - NUISANCE_COLUMNS + axis] = sig.nuisance(gains[axis][r]);
             g.push(&x, *y, *n);
             ic.push(axis, &x, *y);
         }
     }
-    g.absorb(&ic);
+    if sig.per_trial_offsets() {
+        g.absorb(&ic);
+    }
 }
 
 /// One setting of a candidate as a linear least-squares problem on the evaluated rows

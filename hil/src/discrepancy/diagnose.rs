@@ -45,7 +45,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bands::{BANDS_HZ, band_power};
-use super::candidate::{Baseline, Candidate};
+use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial,
@@ -61,7 +61,7 @@ use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
 use super::stats::{jackknife_se, mean_sd, student_t_critical};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
-use crate::session::Session;
+use crate::session::{Axes, Session};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
 
 /// Catalog effects judged from the hand balance (the response to the force pulses).
@@ -268,8 +268,13 @@ pub struct Diagnosis {
     pub extended_nrmse: Option<f64>,
     /// `1 − extended/baseline`.
     pub gain: Option<f64>,
-    /// The nominal balance's own fitted parameters.
+    /// The nominal balance's own fitted parameters ([`nominal_parameters`] and the
+    /// latency).
     pub baseline: BTreeMap<String, f64>,
+    /// The final model's nominal parameters, fitted jointly with every named cart-side
+    /// cause on all trials ([`nominal_parameters`]); the baseline's when none is named,
+    /// empty when the cart balance was not judged.
+    pub model: BTreeMap<String, f64>,
     /// Held-out NRMSE of the nominal cart balance (whatever the cause).
     pub cart_baseline_nrmse: Option<f64>,
     /// Perturbed trials whose response the hand balance used.
@@ -911,6 +916,90 @@ impl TermSelection {
 /// Every trial's sensor force turned back into the rig frame from a sensor rotated by
 /// `angle_deg` (the reading is `R(θ) F`, so `F = R(−θ) reading`; the perturbation
 /// columns are the rig's command and stay).
+/// The nominal part of a cart-balance fit `beta` (masses first, the nuisance columns
+/// last) as named parameters, for the axes the signals have: `moving_mass_x_kg`
+/// (both carts), `moving_mass_y_kg` (upper cart) and, per axis, `motor_force_gain_x`
+/// (`1 + γ`) with a force sensor or `offset_x_n` without one (the constant force the
+/// command holds against: a cable's pull, a tilt, an amplifier's offset; see
+/// `BalanceSignals::nuisance`).
+#[must_use]
+pub fn nominal_parameters(beta: &[f64], signals: &[BalanceSignals]) -> BTreeMap<String, f64> {
+    let Some(first) = signals.first() else {
+        return BTreeMap::new();
+    };
+    let sensed = first.sensed;
+    let n = beta.len();
+    let mut out = BTreeMap::new();
+    for (axis, name) in ["x", "y"].into_iter().enumerate() {
+        if !first.present(axis) {
+            continue;
+        }
+        out.insert(
+            format!("moving_mass_{name}_kg"),
+            beta.get(axis).copied().unwrap_or(f64::NAN),
+        );
+        let nuisance = if n >= 2 + NUISANCE_COLUMNS {
+            beta[n - NUISANCE_COLUMNS + axis]
+        } else {
+            f64::NAN
+        };
+        if sensed {
+            out.insert(format!("motor_force_gain_{name}"), 1.0 + nuisance);
+        } else {
+            out.insert(format!("offset_{name}_n"), nuisance);
+        }
+    }
+    out
+}
+
+/// Drops the parameters of the axis a one-axis rig lacks (`amplitude_y_n` of a
+/// ripple on an x stage: its columns had no row, so their value says nothing).
+fn only_present_axes(d: &mut Diagnosis, axes: Axes) {
+    let absent = if axes.has(0) { "_y_" } else { "_x_" };
+    let keep = |m: &mut BTreeMap<String, f64>| m.retain(|k, _| !k.contains(absent));
+    keep(&mut d.parameters);
+    keep(&mut d.parameter_se);
+    for r in d.ranking.iter_mut().chain(d.conditional.iter_mut()) {
+        keep(&mut r.parameters);
+        keep(&mut r.parameter_se);
+    }
+    for c in &mut d.causes {
+        keep(&mut c.parameters);
+        keep(&mut c.parameter_se);
+    }
+}
+
+/// The shortest block of a continuous log that [`in_blocks`] cuts, s: long enough for
+/// several moves and their reversals, short enough that a minute's log gives a dozen
+/// folds' worth of units.
+pub const BLOCK_S: f64 = 4.0;
+
+/// Cuts each trial's evaluated rows into contiguous blocks of at least `block_s`
+/// (each block then has its own offset, as a trial does); a trial shorter than two
+/// blocks stays whole.
+fn in_blocks(signals: Vec<BalanceSignals>, block_s: f64) -> Vec<BalanceSignals> {
+    signals
+        .into_iter()
+        .flat_map(|s| {
+            let per_block = (block_s * s.rate_hz / s.decim as f64).ceil().max(1.0) as usize;
+            let blocks = (s.rows.len() / per_block).max(1);
+            let len = s.rows.len() / blocks;
+            (0..blocks)
+                .map(|b| {
+                    let end = if b + 1 == blocks {
+                        s.rows.len()
+                    } else {
+                        (b + 1) * len
+                    };
+                    let mut piece = s.clone();
+                    piece.rows = s.rows[b * len..end].to_vec();
+                    piece
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
 fn turn_back(session: &mut Session, angle_deg: f64) {
     let (sn, cs) = angle_deg.to_radians().sin_cos();
     for t in &mut session.trials {
@@ -965,7 +1054,16 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         .collect::<Result<Vec<_>, _>>()?
         .into_iter()
         .flatten()
+        .map(|s| s.on_axes(session.manifest.axes))
         .collect();
+    const MIN_TRIALS: usize = 4;
+    // A continuous log imported as one or a few long trials: its folds are blocks of
+    // time, so that held-out gains stay held out.
+    let signals = if signals.len() < MIN_TRIALS {
+        in_blocks(signals, BLOCK_S)
+    } else {
+        signals
+    };
     let mut hand = judge_hand(session, opts.folds)?;
     let mut not_judged: Vec<NotJudged> = Vec::new();
     let mut d = Diagnosis {
@@ -982,6 +1080,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         extended_nrmse: None,
         gain: None,
         baseline: BTreeMap::new(),
+        model: BTreeMap::new(),
         cart_baseline_nrmse: None,
         hand_trials_used: 0,
         hand_units: 0,
@@ -998,7 +1097,6 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         not_judged: Vec::new(),
         evidence: Vec::new(),
     };
-    const MIN_TRIALS: usize = 4;
     let plant_ok = signals.len() >= MIN_TRIALS;
     let judged = if plant_ok { PLANT_SIDE.len() } else { 0 }
         + if hand.is_ok() { HUMAN_SIDE.len() } else { 0 };
@@ -1029,20 +1127,26 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             "baseline",
         )?;
         let base_nrmse = baseline.nrmse();
-        d.baseline = Baseline
-            .parameters(0, &baseline.beta, latency_s)
-            .into_iter()
-            .collect();
+        d.baseline = nominal_parameters(&baseline.beta, &signals);
+        d.baseline.insert("latency_ms".to_string(), latency_s * 1e3);
         let travel = signals
             .iter()
             .map(|s| s.travel_m(0).max(s.travel_m(1)))
             .fold(0.0, f64::max);
-        let candidates: Vec<Arc<dyn Candidate>> = vec![
+        let mut candidates: Vec<Arc<dyn Candidate>> = vec![
             Arc::new(RailFriction),
             Arc::new(ForceRipple::for_travel(travel)),
             Arc::new(ActuationDelay::candidate()),
-            Arc::new(SensorRotation::default()),
         ];
+        // A rotated sensor needs a sensor, and both of its axes.
+        if session.manifest.axes == Axes::Both && signals.iter().any(|s| s.sensed) {
+            candidates.push(Arc::new(SensorRotation::default()));
+        } else {
+            not_judged.push(NotJudged {
+                effect: "sensor-rotation".to_string(),
+                reason: "needs a handle force sensor on both axes".to_string(),
+            });
+        }
         let fits: Vec<CandidateFit> = candidates
             .into_par_iter()
             .map(|c| {
@@ -1073,6 +1177,21 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             outside_the_catalog(&selection, &mut plant_ranked, &judge, &folds)?;
         plant_named = kept;
         d.unexplained = unexplained;
+        let members: Vec<Member> = selection
+            .members
+            .iter()
+            .filter(|(c, _)| plant_named.iter().any(|k| k.name == c.name()))
+            .cloned()
+            .collect();
+        d.model = if members.is_empty() {
+            d.baseline.clone()
+        } else {
+            let joint = Joint::given(members);
+            let fit = cross_validate(&grams_of(&joint, &signals, latency_s)?, &folds, "the model")?;
+            let mut m = nominal_parameters(&fit.beta, &signals);
+            m.insert("latency_ms".to_string(), latency_s * 1e3);
+            m
+        };
         d.baseline_nrmse = Some(base_nrmse);
         baseline_fit = Some(baseline);
     } else {
@@ -1321,6 +1440,9 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
     d.not_judged = not_judged;
     d.ranking = ranking;
+    if session.manifest.axes != Axes::Both {
+        only_present_axes(&mut d, session.manifest.axes);
+    }
     let fits = plant_ranked.into_iter().map(|(_, f)| f).collect();
     Ok(Analysis {
         diagnosis: d,

@@ -167,7 +167,9 @@ impl Gram {
     }
 
     /// The least-squares coefficients within [`Self::bounds`], or `None` when `XᵀX` is
-    /// singular. Columns are scaled to unit diagonal before the Cholesky factorisation,
+    /// singular. A column that no row touches (its diagonal exactly zero: the columns
+    /// of an axis a rig lacks, a force gain left out) is held at zero, and the others
+    /// solved as if it were not there. Columns are scaled to unit diagonal before the Cholesky factorisation,
     /// so that regressors in different units (m/s², N) do not spoil its conditioning.
     ///
     /// When the unconstrained solution breaks a bound, every assignment of the bounded
@@ -246,6 +248,13 @@ impl Gram {
             }
             return Some(beta);
         }
+        let empty: Vec<(usize, f64)> = (0..p)
+            .filter(|&i| self.xtx[i * p + i] == 0.0)
+            .map(|i| (i, 0.0))
+            .collect();
+        if !empty.is_empty() && empty.len() < p {
+            return self.solve_free(&empty);
+        }
         let scale: Vec<f64> = (0..p)
             .map(|i| self.xtx[i * p + i])
             .map(|d| if d > 0.0 { 1.0 / d.sqrt() } else { 0.0 })
@@ -283,10 +292,19 @@ impl Gram {
         if self.n <= p {
             return None;
         }
-        let a = DMatrix::from_fn(p, p, |i, j| self.xtx[i * p + j]);
+        // Columns without a row (an absent axis) have no variance: zero.
+        let live: Vec<usize> = (0..p).filter(|&i| self.xtx[i * p + i] != 0.0).collect();
+        let k = live.len();
+        let a = DMatrix::from_fn(k, k, |i, j| self.xtx[live[i] * p + live[j]]);
         let inv = a.try_inverse()?;
-        let s2 = self.sse(beta) / (self.n - p) as f64;
-        Some((0..p * p).map(|k| inv[(k / p, k % p)] * s2).collect())
+        let s2 = self.sse(beta) / (self.n - k) as f64;
+        let mut cov = vec![0.0; p * p];
+        for (a, &i) in live.iter().enumerate() {
+            for (b, &j) in live.iter().enumerate() {
+                cov[i * p + j] = inv[(a, b)] * s2;
+            }
+        }
+        Some(cov)
     }
 }
 

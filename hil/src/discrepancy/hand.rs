@@ -87,7 +87,7 @@ use super::gram::Gram;
 use super::hand_signals::{
     HandArm, HandData, HandResponse, OddUnits, average_by_angle, hand_responses, lagged, odd_parts,
 };
-use crate::session::Session;
+use crate::session::{Axes, Session};
 
 /// Feedback delays the baseline searches, ms: the arm's default (000_*'s δ_s), which
 /// the drawn subjects keep. A grid of 30–120 ms was tried: on generated sessions it
@@ -876,6 +876,20 @@ pub fn judge_hand(
     session: &Session,
     folds: usize,
 ) -> Result<Result<HandJudgement, String>, DiscrepancyError> {
+    if session.manifest.axes != Axes::Both {
+        return Ok(Err(format!(
+            "a rig of one axis ({:?}): the hand balance needs the planar arm on both axes",
+            session.manifest.axes.names()
+        )));
+    }
+    if session
+        .iter()
+        .all(|(_, t)| t.fx_n.iter().chain(&t.fy_n).all(|f| *f == 0.0))
+    {
+        return Ok(Err(
+            "no handle force sensor (every force sample is zero): the hand balance needs the hand's force".to_string(),
+        ));
+    }
     let arm = HandArm::from_session(session)?;
     let (responses, replicates) = match hand_responses(session, &arm)? {
         HandData::Responses(r) => match (

@@ -54,7 +54,7 @@ pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
 pub use diagnose::{
     Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, FoundTerm, HUMAN_SIDE, NotJudged,
-    PLANT_SIDE, Ranked, Threshold, Unexplained, diagnose,
+    PLANT_SIDE, Ranked, Threshold, Unexplained, diagnose, nominal_parameters,
 };
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITY_STEPS, smooth_velocity_m_per_s};
@@ -77,7 +77,8 @@ pub use report::{convention, table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;
 pub use signals::{
-    BalanceSignals, EVALUATION_RATE_HZ, SMOOTHING_ORDER, SMOOTHING_WINDOW_S, window_for_rate,
+    BalanceSignals, EVALUATION_RATE_HZ, REST_SPEED_M_PER_S, SMOOTHING_ORDER, SMOOTHING_WINDOW_S,
+    window_for_rate,
 };
 pub use subject_fit::{
     FitOptions, FitResidual, SubjectFit, fit_subject, fit_trials, travel_times_s,

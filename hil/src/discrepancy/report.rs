@@ -52,6 +52,24 @@ fn sig(v: f64) -> String {
 }
 
 /// The ranking table printed by `rigtwin diagnose`.
+/// The masses and the nuisances' parameters of a nominal fit (`Diagnosis::baseline`
+/// or `model`), in the fit's axes: "moving mass x 3.196 kg, offset x 1.52 N".
+fn nominal_text(p: &std::collections::BTreeMap<String, f64>) -> String {
+    let mut parts = Vec::new();
+    for axis in ["x", "y"] {
+        if let Some(m) = p.get(&format!("moving_mass_{axis}_kg")) {
+            parts.push(format!("moving mass {axis} {m:.3} kg"));
+        }
+        if let Some(g) = p.get(&format!("motor_force_gain_{axis}")) {
+            parts.push(format!("motor force gain {axis} {g:.3}"));
+        }
+        if let Some(o) = p.get(&format!("offset_{axis}_n")) {
+            parts.push(format!("offset {axis} {o:.3} N"));
+        }
+    }
+    parts.join(", ")
+}
+
 #[must_use]
 pub fn table(d: &Diagnosis) -> String {
     let mut out = String::new();
@@ -60,7 +78,22 @@ pub fn table(d: &Diagnosis) -> String {
         "session {}  ({} of {} trials with motor command, {} Hz, {} folds)",
         d.session, d.trials_used, d.trials_total, d.rate_hz, d.folds
     );
-    if let Some(b) = d.cart_baseline_nrmse {
+    if let (Some(b), false) = (
+        d.cart_baseline_nrmse,
+        d.baseline.contains_key("moving_mass_x_kg") && d.baseline.contains_key("moving_mass_y_kg"),
+    ) {
+        // A rig of one axis, or without a force sensor: its axis's mass and offset.
+        let _ = writeln!(
+            out,
+            "cart balance  {}, latency {:.3} ms, held-out NRMSE {:.4}",
+            nominal_text(&d.baseline),
+            d.baseline.get("latency_ms").copied().unwrap_or(f64::NAN),
+            b
+        );
+        if d.model != d.baseline && !d.model.is_empty() {
+            let _ = writeln!(out, "with the causes  {}", nominal_text(&d.model));
+        }
+    } else if let Some(b) = d.cart_baseline_nrmse {
         let g = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
         let _ = writeln!(
             out,

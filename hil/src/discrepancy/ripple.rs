@@ -134,7 +134,10 @@ impl Candidate for ForceRipple {
         let mut grams = vec![Gram::new(p).with_bounds(gain_bounds(p)); self.n];
         let mut offsets = vec![Intercepts::new(2, p); self.n];
         let mut x = vec![0.0; p];
-        for axis in 0..2 {
+        if !sig.per_trial_offsets() {
+            grams.iter_mut().for_each(|g| g.bounds.clear());
+        }
+        for axis in (0..2).filter(|a| sig.present(*a)) {
             let a = sig.at_rows(&sig.a[axis]);
             let q = sig.at_rows(&sig.q[axis]);
             // This axis's sin, cos columns; the other axis's stay zero.
@@ -148,7 +151,7 @@ impl Candidate for ForceRipple {
                 for (xi, col) in x[2..2 + kb].iter_mut().zip(&base.own[axis]) {
                     *xi = col[r];
                 }
-                x[2 + kb + OWN + axis] = base.gain[axis][r];
+                x[2 + kb + OWN + axis] = sig.nuisance(base.gain[axis][r]);
                 let y = base.target[axis][r];
                 for (g, ic) in grams.iter_mut().zip(&mut offsets) {
                     x[js] = s;
@@ -159,8 +162,10 @@ impl Candidate for ForceRipple {
                 }
             }
         }
-        for (g, ic) in grams.iter_mut().zip(&offsets) {
-            g.absorb(ic);
+        if sig.per_trial_offsets() {
+            for (g, ic) in grams.iter_mut().zip(&offsets) {
+                g.absorb(ic);
+            }
         }
         Ok(grams)
     }

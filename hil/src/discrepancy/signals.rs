@@ -29,7 +29,7 @@
 use rigtwin_device::signal::{EdgeMode, SignalError, savgol_coeffs, savgol_filter};
 
 use super::error::DiscrepancyError;
-use crate::session::{Trial, TrialEntry};
+use crate::session::{Axes, Trial, TrialEntry};
 
 /// Length of the smoothing window, s. 41 ms with a cubic passes ~30 Hz: enough for the
 /// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz,
@@ -41,6 +41,13 @@ pub const SMOOTHING_WINDOW_S: f64 = 0.041;
 pub const SMOOTHING_ORDER: usize = 3;
 /// Rate at which the balance is evaluated, Hz (see the module docs).
 pub const EVALUATION_RATE_HZ: f64 = 500.0;
+
+/// Below this speed (smoothed, on every present axis) a carriage without a force
+/// sensor counts as at rest ([`BalanceSignals::on_axes`]), m/s: 2 mm/s, forty times
+/// the smoothed velocity's noise on a 1 µm encoder and a hundredth of a bench move's
+/// peak speed; between 2 and 20 mm/s the fitted friction of the project's servo axis
+/// moves by less than 1 %.
+pub const REST_SPEED_M_PER_S: f64 = 2e-3;
 
 /// One trial's smoothed channels at the recording rate, per axis `[x, y]`.
 #[derive(Debug, Clone)]
@@ -69,6 +76,14 @@ pub struct BalanceSignals {
     pub force_taps: Vec<f64>,
     /// Evaluated sample indices.
     pub rows: Vec<usize>,
+    /// Which axes the rig has (`axes` in the manifest; both unless [`Self::on_axes`]
+    /// says otherwise). An absent axis contributes no rows to any balance.
+    pub axes: Axes,
+    /// Whether the trial has a handle force sensor: some force sample is not zero. A
+    /// one-axis stage logs none, and its force columns are zero; then the motor's
+    /// force gain cannot be told from the masses (the balance holds only `u`), so its
+    /// column is left out and the masses come out in the command's units.
+    pub sensed: bool,
 }
 
 /// The smoothing window in samples for a rate: odd, at least 5.
@@ -132,7 +147,68 @@ impl BalanceSignals {
             f: [force(&trial.fx_n)?, force(&trial.fy_n)?],
             force_taps: taps,
             rows,
+            axes: Axes::Both,
+            sensed: trial.fx_n.iter().chain(&trial.fy_n).any(|f| *f != 0.0),
         }))
+    }
+
+    /// The same signals on the axes `axes` (a session's `axes`). Without a force sensor
+    /// (a servo stage under a position loop), rows within half a smoothing window of a
+    /// sample where every present axis moves slower than [`REST_SPEED_M_PER_S`] are
+    /// left out: a carriage at rest holds static friction, any force within `±F_s` that
+    /// no law of velocity gives, and the loop's command there says nothing about the
+    /// masses; the balance filter spreads that force over its window, where it biased
+    /// the fitted delay of the project's servo axis by 0.9 ms (0.25 ms without it). A careful identification of such an
+    /// axis fits its moving samples alone, as this does. With a sensor the hand keeps
+    /// the carts in motion and the still phases stay in (they tell an offset from a
+    /// Coulomb friction on one-signed reaches).
+    #[must_use]
+    pub fn on_axes(mut self, axes: Axes) -> Self {
+        self.axes = axes;
+        if !self.sensed {
+            // Rest samples, and their running count, so that a row is kept only when its
+            // window (the balance filter's reach) holds none.
+            let v = &self.v;
+            let n = v[0].len();
+            let mut at_rest = vec![0usize; n + 1];
+            for j in 0..n {
+                let rest = (0..2).all(|a| !axes.has(a) || v[a][j].abs() < REST_SPEED_M_PER_S);
+                at_rest[j + 1] = at_rest[j] + usize::from(rest);
+            }
+            let half = self.window / 2;
+            self.rows.retain(|&i| {
+                let (lo, hi) = (i.saturating_sub(half), (i + half + 1).min(n));
+                at_rest[hi] == at_rest[lo]
+            });
+        }
+        self
+    }
+
+    /// Whether `axis` contributes rows to the balance.
+    #[must_use]
+    pub fn present(&self, axis: usize) -> bool {
+        self.axes.has(axis)
+    }
+
+    /// The nuisance column of a row whose command enters the balance as `gain`.
+    ///
+    /// With a force sensor it is the command itself (the force constant's error `γ`,
+    /// bounded) and each trial's offsets are eliminated (a sensor's tare). Without one
+    /// the command's scale cannot be told from the masses (the balance holds only `u`),
+    /// and a constant force on the carriage (a cable's pull, a tilted rail, an
+    /// amplifier's offset) is a property of the axis, not of a trial: the column is a
+    /// constant 1, unbounded, one per axis for the whole session, and its coefficient is
+    /// that force (the part of the command spent on it, N).
+    #[must_use]
+    pub fn nuisance(&self, gain: f64) -> f64 {
+        if self.sensed { gain } else { 1.0 }
+    }
+
+    /// Whether each trial's constant force per axis is eliminated (a sensor's tare):
+    /// with a force sensor only (see [`Self::nuisance`]).
+    #[must_use]
+    pub fn per_trial_offsets(&self) -> bool {
+        self.sensed
     }
 
     /// The balance filter applied to a force column computed from this trial's samples
