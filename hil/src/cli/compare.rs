@@ -180,6 +180,15 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
+    if session.manifest.axes != rigtwin::session::Axes::Both {
+        anyhow::bail!(
+            "{}: a rig of one axis (axes = {:?}): compare re-simulates the planar rig with a subject's arm, which this rig \
+             does not have; `rigtwin diagnose` judges the axis's own balance (what the twin gets wrong about it, with \
+             held-out gains)",
+            args.session.display(),
+            session.manifest.axes.names()
+        );
+    }
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
     let mut options = CompareOptions::default();
     options.fit.max_trials = args.fit_trials;

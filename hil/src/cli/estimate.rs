@@ -148,6 +148,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
+    if session.manifest.axes != rigtwin::session::Axes::Both {
+        anyhow::bail!(
+            "{}: a rig of one axis (axes = {:?}) has no planar arm whose impedance could be estimated; \
+             `rigtwin diagnose` identifies the axis itself (mass, friction, offset)",
+            args.session.display(),
+            session.manifest.axes.names()
+        );
+    }
     let has_pulses = session
         .manifest
         .trials

@@ -58,6 +58,8 @@ struct Summary {
     session: PathBuf,
     source: &'static str,
     rate_hz: f64,
+    /// The rig's axes (`axes` in the manifest).
+    axes: &'static [&'static str],
     created: String,
     device_kind: String,
     mass_kg: [f64; 2],
@@ -122,6 +124,7 @@ fn summarise(args: &Args) -> anyhow::Result<Summary> {
         session: args.session.clone(),
         source: m.source.as_str(),
         rate_hz: m.rate_hz,
+        axes: m.axes.names(),
         created: m.created.clone(),
         device_kind: m.device.kind.clone(),
         mass_kg: m.device.mass_kg,
@@ -150,8 +153,18 @@ fn render(s: &Summary) -> String {
     let _ = writeln!(out, "session   {}", s.session.display());
     let _ = writeln!(
         out,
-        "format    rig-session v1, source {}, {} Hz, created {}",
-        s.source, s.rate_hz, s.created
+        "format    rig-session v1, source {}, {} Hz, created {}{}",
+        s.source,
+        s.rate_hz,
+        s.created,
+        if s.axes.len() == 2 {
+            String::new()
+        } else {
+            format!(
+                ", one axis ({}; the other's columns are zero)",
+                s.axes.join("")
+            )
+        }
     );
     let _ = writeln!(
         out,
