@@ -5,8 +5,9 @@
 //! - top level, `[device]`, `[[trial]]`, `[trial.perturbation]`: **no**. These keys
 //!   drive models and analyses; a misspelt optional key (`handle_mass = 0.35`) would
 //!   otherwise be dropped without a word. An unknown key is [`SessionError::UnknownKey`].
-//!   The project's own additions are declared here: `[sim]`, `amplitude_m` for position
-//!   perturbations, trial kinds and perturbation kinds beyond the spec's.
+//!   The project's own additions are declared here: `axes` for rigs of one axis,
+//!   `[sim]`, `[timing]`, `amplitude_m` for position perturbations, trial kinds and
+//!   perturbation kinds beyond the spec's (all listed in `hil/session/FORMAT.md`).
 //! - `[subject]` and `[sim]`: **yes**. Labs record subject metadata (age, handedness)
 //!   and the simulator records whatever reproduces a run; unknown keys are kept in
 //!   `extra`, in name order, and written back.
