@@ -110,6 +110,7 @@ impl fmt::Display for Inventory {
             .max()
             .unwrap_or(4);
         writeln!(f, "  {:wn$}  {:ws$}  {:wc$}  note", "name", "shape", "type")?;
+        // Widths count characters (`×` is one), as `format!` pads.
         for (e, shape) in self.entries.iter().zip(&shapes) {
             let note = match (e.rate_hz, e.numeric) {
                 (Some(r), _) => format!("uniform time: {r} Hz"),
@@ -117,13 +118,8 @@ impl fmt::Display for Inventory {
                 (None, false) if e.class.starts_with("struct") => "fields below".into(),
                 (None, false) => "not a channel".into(),
             };
-            // Pad by characters: `×` is one character but two bytes.
-            let pad = ws - shape.chars().count();
-            writeln!(
-                f,
-                "  {:wn$}  {shape}{:pad$}  {:wc$}  {note}",
-                e.name, "", e.class
-            )?;
+            let line = format!("  {:wn$}  {shape:ws$}  {:wc$}  {note}", e.name, e.class);
+            writeln!(f, "{}", line.trim_end())?;
         }
         if self.entries.is_empty() {
             writeln!(f, "  (no variables)")?;
