@@ -6,7 +6,8 @@
 //! does not say, unless every field of it is a number; without a header the columns are
 //! `col1`, `col2`, …. Lines starting with `#` and blank lines are skipped; CRLF line
 //! ends and a UTF-8 byte-order mark are accepted, and errors give the file's own line
-//! numbers. A field that is not a number is an error only if the map uses its column.
+//! numbers (every line counts, comments included). Fields are trimmed; a field may be
+//! double-quoted (a header `"x, mm"`), but a quoted field may not span lines. A field that is not a number is an error only if the map uses its column.
 
 use std::path::Path;
 
@@ -28,6 +29,52 @@ fn sniff(text: &str) -> u8 {
     } else {
         b','
     }
+}
+
+/// Splits one line at `delim` into trimmed fields; a field may be double-quoted (`""`
+/// inside is a quote), so that a header such as `"x, mm"` is one field.
+fn split(line: &str, delim: char, out: &mut Vec<String>) -> Result<(), String> {
+    out.clear();
+    let mut field = String::new();
+    let mut chars = line.chars().peekable();
+    let mut quoted = false;
+    let mut was_quoted = false;
+    while let Some(c) = chars.next() {
+        if quoted {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    field.push('"');
+                    chars.next();
+                } else {
+                    quoted = false;
+                }
+            } else {
+                field.push(c);
+            }
+        } else if c == delim {
+            out.push(if was_quoted {
+                std::mem::take(&mut field)
+            } else {
+                std::mem::take(&mut field).trim().to_string()
+            });
+            was_quoted = false;
+        } else if c == '"' && field.trim().is_empty() {
+            field.clear();
+            quoted = true;
+            was_quoted = true;
+        } else {
+            field.push(c);
+        }
+    }
+    if quoted {
+        return Err("a quoted field is not closed on its line".into());
+    }
+    out.push(if was_quoted {
+        field
+    } else {
+        field.trim().to_string()
+    });
+    Ok(())
 }
 
 fn parse_number(text: &str) -> Option<f64> {
@@ -54,36 +101,22 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &CsvOptions) -> Result<Log, 
         csv_error(line, "not UTF-8 text".into())
     })?;
     let delimiter = opts.delimiter.unwrap_or_else(|| sniff(text));
-    let mut reader = csv::ReaderBuilder::new()
-        .delimiter(delimiter)
-        .has_headers(false)
-        .comment(Some(b'#'))
-        .flexible(true)
-        .trim(csv::Trim::All)
-        .from_reader(bytes);
     let mut names: Vec<String> = Vec::new();
     let mut columns: Vec<Vec<f64>> = Vec::new();
     let mut bad: Vec<Option<(usize, String)>> = Vec::new();
     let mut dec: Vec<Option<i32>> = Vec::new();
     let mut lines: Vec<usize> = Vec::new();
     let mut header_line = 0;
-    let mut record = csv::StringRecord::new();
-    loop {
-        match reader.read_record(&mut record) {
-            Ok(false) => break,
-            Ok(true) => {}
-            Err(e) => {
-                let line = e
-                    .position()
-                    .map_or(0, |p| usize::try_from(p.line()).unwrap_or(usize::MAX));
-                return Err(csv_error(line, e.to_string()));
-            }
+    let mut record: Vec<String> = Vec::new();
+    for (k, raw) in text.split('\n').enumerate() {
+        let line = k + 1;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        if raw.trim_start().starts_with('#') {
+            continue;
         }
-        let line = record
-            .position()
-            .map_or(0, |p| usize::try_from(p.line()).unwrap_or(usize::MAX));
+        split(raw, char::from(delimiter), &mut record).map_err(|m| csv_error(line, m))?;
         // A line holding only blanks and delimiters.
-        if record.iter().all(str::is_empty) {
+        if record.iter().all(String::is_empty) {
             continue;
         }
         if names.is_empty() {
@@ -99,7 +132,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &CsvOptions) -> Result<Log, 
                     let name = if f.is_empty() {
                         format!("col{}", k + 1)
                     } else {
-                        f.to_string()
+                        f.clone()
                     };
                     if names.contains(&name) {
                         return Err(csv_error(line, format!("column `{name}` appears twice")));
@@ -138,7 +171,7 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &CsvOptions) -> Result<Log, 
                 None => {
                     columns[k].push(f64::NAN);
                     if bad[k].is_none() {
-                        bad[k] = Some((row, f.to_string()));
+                        bad[k] = Some((row, f.clone()));
                     }
                 }
             }

@@ -1,6 +1,8 @@
 //! Continuous text logs: cut by a marker column, by a table of onsets and by movement
 //! starts; header or not, comma or tab, comments and CRLF.
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // a panic in a test is its failure message
+
 mod common;
 
 use common::{DEVICE, tree, write};
@@ -134,7 +136,7 @@ fn csv_with_header_comments_and_crlf_is_cut_by_its_marker() {
         ),
     );
     let out = dir.path().join("s");
-    let imported = import(&[log.clone()], &map, &out).unwrap();
+    let imported = import(std::slice::from_ref(&log), &map, &out).unwrap();
     assert_eq!(imported.rate_hz, RATE);
     assert_eq!(imported.perturbed, 1);
     check_marker_session(&Session::read(&out).unwrap());
@@ -161,7 +163,7 @@ fn headerless_tsv_names_columns_col1_col2() {
         ),
     );
     let out = dir.path().join("s");
-    import(&[log.clone()], &map, &out).unwrap();
+    import(std::slice::from_ref(&log), &map, &out).unwrap();
     check_marker_session(&Session::read(&out).unwrap());
     let inv = inspect(&log).unwrap();
     assert_eq!(inv.entries[8].name, "col9");
@@ -169,8 +171,11 @@ fn headerless_tsv_names_columns_col1_col2() {
 
     // The same log with the delimiter and header stated in the map.
     let semi = write(dir.path(), "block1.ssv", &log_text(";", false));
-    let stated = map_text(NO_HEADER_NAMES, r#"cut = "marker""#, "[perturbation]\nfrom = \"channel\"")
-        + "\n[csv]\ndelimiter = \";\"\nheader = false\n";
+    let stated = map_text(
+        NO_HEADER_NAMES,
+        r#"cut = "marker""#,
+        "[perturbation]\nfrom = \"channel\"",
+    ) + "\n[csv]\ndelimiter = \";\"\nheader = false\n";
     let map2 = write(dir.path(), "map2.toml", &stated);
     let out2 = dir.path().join("s2");
     import(&[semi], &map2, &out2).unwrap();
@@ -251,7 +256,11 @@ angle_deg = [90.0, 0.0, -45.0]"#,
     assert_eq!(imported.samples, vec![200; 3]);
     assert_eq!(imported.perturbed, 2);
     let s = Session::read(&out).unwrap();
-    let firsts: Vec<f64> = s.trials.iter().map(|t| t.ref_x_m.as_ref().unwrap()[0]).collect();
+    let firsts: Vec<f64> = s
+        .trials
+        .iter()
+        .map(|t| t.ref_x_m.as_ref().unwrap()[0])
+        .collect();
     assert_eq!(firsts, [250.0, 1000.0, 1750.0]);
     let p = s.manifest.trials[0].perturbation.as_ref().unwrap();
     assert_eq!((p.onset_s, p.duration_s, p.angle_deg), (0.1, 0.15, 90.0));
@@ -266,15 +275,22 @@ fn importing_twice_gives_byte_identical_sessions() {
     let map = write(
         dir.path(),
         "map.toml",
-        &map_text(HEADER_NAMES, r#"cut = "marker""#, "[perturbation]\nfrom = \"channel\""),
+        &map_text(
+            HEADER_NAMES,
+            r#"cut = "marker""#,
+            "[perturbation]\nfrom = \"channel\"",
+        ),
     );
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
-    import(&[log.clone()], &map, &a).unwrap();
+    import(std::slice::from_ref(&log), &map, &a).unwrap();
     import(&[log], &map, &b).unwrap();
     let (ta, tb) = (tree(&a), tree(&b));
     assert_eq!(ta.len(), 5, "session.toml and four trials: {ta:?}");
     assert!(ta == tb, "the two imports differ");
     let manifest = String::from_utf8(ta[0].1.clone()).unwrap();
-    assert!(manifest.contains("created = \"1970-01-01T00:00:00Z\""), "{manifest}");
+    assert!(
+        manifest.contains("created = \"1970-01-01T00:00:00Z\""),
+        "{manifest}"
+    );
     assert!(manifest.contains("sha256"), "{manifest}");
 }

@@ -8,6 +8,8 @@
 //! value widened to f64, which is exact too (within 2⁻²⁴ relative of the double they
 //! were made from).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // a panic in a test is its failure message
+
 mod common;
 
 use std::path::Path;
@@ -129,7 +131,7 @@ fn structs_matrices_ints_and_singles_round_trip_compressed_and_not() {
         let map = write(dir.path(), "map.toml", &map_text(r#"cut = "whole""#));
         // The pert channels are not mapped: zeros (no [perturbation]); forces are.
         let out = dir.path().join("session");
-        let imported = import(&[mat.clone()], &map, &out).unwrap();
+        let imported = import(std::slice::from_ref(&mat), &map, &out).unwrap();
         assert_eq!(imported.rate_hz, 1000.0);
         assert_eq!(imported.samples, vec![N]);
         let s = Session::read(&out).unwrap();
