@@ -299,7 +299,7 @@ pub enum ImportError {
     },
 
     /// A session column the format requires has no source and may not be zero.
-    #[error("{}: session column `{column}` is required and not mapped: {reason} ({at})", at.map.display())]
+    #[error("{}:{}: key `{}`: session column `{column}` is required and not mapped: {reason}", at.map.display(), at.line, at.key)]
     MissingChannel {
         /// The session column.
         column: String,

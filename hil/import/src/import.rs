@@ -291,7 +291,9 @@ fn zeroed_channels(map: &Map) -> Result<(Vec<ZeroedChannel>, Vec<&'static str>),
         } else if is_force && !map.force_sensor {
             Some("device.force_sensor = false".to_string())
         } else if is_pert && !pert_channel {
-            Some("no perturbation channel ([perturbation] absent or from = \"table\")".to_string())
+            Some(
+                "no perturbation channel: [perturbation] is absent or from = \"table\"".to_string(),
+            )
         } else {
             None
         };
@@ -369,7 +371,7 @@ fn cut_file(log: &Log, map: &Map, zero_cols: &[&'static str]) -> Result<Cutout, 
             } else {
                 None
             };
-            match uniform_rate(&t, |p| time_tolerance(decimals)(p) * src.scale.max(1.0)) {
+            match uniform_rate(&t, time_tolerance(decimals, src.scale)) {
                 UniformFit::Rate(r) => (r, t[0], Some(t)),
                 UniformFit::TooShort => {
                     return Err(ImportError::WrongShape {

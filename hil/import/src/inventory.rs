@@ -63,7 +63,8 @@ pub(crate) fn inventory(log: &Log) -> Inventory {
             let candidate =
                 v.bad.is_none() && vector && (looks_like_time(&v.name) || (text && k == 0));
             let rate_hz = match (&v.values, candidate) {
-                (Some(values), true) => match uniform_rate(values, time_tolerance(v.decimals)) {
+                (Some(values), true) => match uniform_rate(values, time_tolerance(v.decimals, 1.0))
+                {
                     UniformFit::Rate(r) => Some(r),
                     _ => None,
                 },

@@ -260,11 +260,12 @@ pub(crate) enum UniformFit {
     },
 }
 
-/// The allowed deviation from a uniform clock: 1e-6 of the period, plus half the last
-/// written decimal for text (capped at a quarter period, so a missing sample is caught).
-pub(crate) fn time_tolerance(decimals: Option<i32>) -> impl Fn(f64) -> f64 {
+/// The allowed deviation from a uniform clock: 1e-6 of the period, plus, for text, half
+/// the last decimal written (times the `scale` into seconds), capped at a quarter
+/// period so that a missing sample is always caught.
+pub(crate) fn time_tolerance(decimals: Option<i32>, scale: f64) -> impl Fn(f64) -> f64 {
     move |period: f64| {
         let rounding = decimals.map_or(0.0, |d| 0.5 * 10_f64.powi(-d.clamp(-300, 300)));
-        rounding.min(0.25 * period) + 1e-6 * period
+        (rounding * scale.abs()).min(0.25 * period) + 1e-6 * period
     }
 }

@@ -30,6 +30,9 @@ pub(crate) const CHANNELS: [(&str, usize); 12] = [
     ("cmd_fy_n", 1),
 ];
 
+/// The map's required top-level tables.
+const TOP_LEVEL: [&str; 4] = ["time", "channels", "device", "trials"];
+
 /// The default of `created`: a fixed instant, so that output never depends on the clock.
 pub const DEFAULT_CREATED: &str = "1970-01-01T00:00:00Z";
 
@@ -360,6 +363,16 @@ impl Locator<'_> {
         let quoted = message.split('`').nth(1);
         let map = self.file.to_path_buf();
         if message.starts_with("missing field") {
+            // A missing table of the document is reported at the document's span.
+            if let Some(q) = quoted
+                && TOP_LEVEL.contains(&q)
+            {
+                return ImportError::MapMissingKey {
+                    map,
+                    line: 1,
+                    key: q.to_string(),
+                };
+            }
             return ImportError::MapMissingKey {
                 map,
                 line,

@@ -294,3 +294,46 @@ fn importing_twice_gives_byte_identical_sessions() {
     );
     assert!(manifest.contains("sha256"), "{manifest}");
 }
+
+#[test]
+fn several_logs_number_their_trials_in_order_and_must_share_a_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = write(dir.path(), "block1.csv", &log_text(",", true));
+    let b = write(dir.path(), "block2.tsv", &log_text("\t", true));
+    let map = write(
+        dir.path(),
+        "map.toml",
+        &map_text(HEADER_NAMES, r#"cut = "marker""#, ""),
+    );
+    let out = dir.path().join("s");
+    let imported = import(&[a.clone(), b], &map, &out).unwrap();
+    assert_eq!(imported.trials(), 8);
+    let s = Session::read(&out).unwrap();
+    let ids: Vec<u32> = s.manifest.trials.iter().map(|t| t.id).collect();
+    assert_eq!(ids, (1..=8).collect::<Vec<_>>());
+    assert_eq!(s.manifest.subject.id, "block1");
+    assert_eq!(s.trials[4], s.trials[0]);
+
+    // A log at another rate.
+    let slow = log_text(",", true);
+    let mut slow_text = String::from("time_s,x,y,fx,fy,pfx,pfy,trig,idx\n");
+    for line in slow.lines().filter(|l| !l.starts_with('#')).skip(1) {
+        let (t, rest) = line.split_once(',').unwrap();
+        let t: f64 = t.parse().unwrap();
+        slow_text.push_str(&format!("{:.3},{rest}\n", t * 2.0));
+    }
+    let c = write(dir.path(), "slow.csv", &slow_text);
+    let e = import(&[a, c], &map, &dir.path().join("s2")).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            rigtwin_import::ImportError::RateMismatch {
+                rate_hz: 250.0,
+                first_rate_hz: 500.0,
+                ..
+            }
+        ),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("slow.csv"), "{e}");
+}

@@ -450,6 +450,13 @@ fn bad_map_values_name_the_map_line_and_key() {
     assert!(matches!(e, ImportError::MapMissingKey { .. }), "{e:?}");
     let msg = e.to_string();
     assert!(msg.contains("`device.mass_kg`"), "{msg}");
+    names_map(&msg, &c.map, c.line("[device]"), "device.mass_kg");
+    // So does a missing table.
+    let text = base.replace("[trials]\ncut = \"whole\"\n", "");
+    let c = Case::new(&text);
+    let e = Map::read(&c.map).unwrap_err();
+    assert!(matches!(e, ImportError::MapMissingKey { .. }), "{e:?}");
+    names_map(&e.to_string(), &c.map, 1, "trials");
 }
 
 #[test]
