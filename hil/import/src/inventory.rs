@@ -18,7 +18,7 @@ pub struct Entry {
     /// `char`, `cell`, `text` (a CSV column with a field that is not a number)…
     pub class: String,
     /// The sampling rate, Hz, when this looks like a uniform time vector (named `t`,
-    /// `time`, `t_s` or `*.time`, or a CSV's first column).
+    /// `time`, `t_s`, `tout`, or ending in `.time` and so on, or a CSV's first column).
     pub rate_hz: Option<f64>,
     /// Whether a map can use it as a channel (numeric).
     pub numeric: bool,

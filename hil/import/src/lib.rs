@@ -32,7 +32,9 @@
 //! semicolon, sniffed from the first line (or set by `[csv] delimiter`); the first row is
 //! a header unless every field of it is a number (or as `[csv] header` says); without a
 //! header the columns are `col1`, `col2`, …. Lines starting with `#` and blank lines are
-//! skipped; CRLF line ends are fine, and errors give the file's own line numbers.
+//! skipped; CRLF line ends are fine, and errors give the file's own line numbers. Fields
+//! are trimmed and may be double-quoted (a header `"x, mm"`); a field that is not a
+//! number is an error only when the map uses its column.
 //!
 //! **Variables and columns.** A map names a source by `var` (a MATLAB variable, or a
 //! CSV column name). A vector (1×N, N×1, or 1×1×N as Simulink writes) is one channel. A

@@ -245,3 +245,72 @@ cut = "whole"
     assert!(manifest.contains("kind = \"position-servo\""), "{manifest}");
     let _ = Map::read(&dir.path().join("map.toml")).unwrap();
 }
+
+#[test]
+fn simulink_structure_with_time_and_struct_arrays() {
+    let dir = tempfile::tempdir().unwrap();
+    let mat = dir.path().join("sim.mat");
+    python(&format!(
+        r#"
+import numpy as np, scipy.io
+N = {N}
+i = np.arange(N)
+pos = (i % 97).astype(float) * 0.25 - 10.0 + (i // 97).astype(float) * 0.5
+trials = np.zeros((1, 2), dtype=[("pos", "O"), ("id", "O")])
+trials[0, 0] = (pos * 2.0, 1.0)
+trials[0, 1] = (pos * 3.0, 2.0)
+scipy.io.savemat(r"{}", {{
+    "logsout": {{"time": (i / 2000.0).reshape(N, 1),
+                 "signals": {{"values": pos.reshape(1, 1, N), "label": "x"}}}},
+    "trials": trials,
+}}, do_compression=True, format="5")
+"#,
+        mat.display()
+    ));
+    let inv = inspect(&mat).unwrap();
+    let names: Vec<&str> = inv.entries.iter().map(|e| e.name.as_str()).collect();
+    for n in [
+        "logsout.time",
+        "logsout.signals.values",
+        "trials(1).pos",
+        "trials(2).pos",
+        "trials(2).id",
+    ] {
+        assert!(names.contains(&n), "{n} not in {names:?}");
+    }
+    let time = inv.entries.iter().find(|e| e.name == "logsout.time").unwrap();
+    assert_eq!(time.rate_hz, Some(2000.0));
+    let values = inv
+        .entries
+        .iter()
+        .find(|e| e.name == "logsout.signals.values")
+        .unwrap();
+    assert_eq!(values.shape, vec![1, 1, N]);
+
+    let map = write(
+        dir.path(),
+        "map.toml",
+        &format!(
+            r#"
+axes = ["x"]
+[time]
+var = "logsout.time"
+[channels]
+x_m = {{ var = "logsout.signals.values", scale = 1e-3 }}
+ref_x_m = {{ var = "trials(2).pos", scale = 1e-3 }}
+{DEVICE}
+[trials]
+cut = "whole"
+"#
+        ),
+    );
+    let out = dir.path().join("s");
+    import(&[mat], &map, &out).unwrap();
+    let s = Session::read(&out).unwrap();
+    assert_eq!(s.manifest.rate_hz, 2000.0);
+    let t = &s.trials[0];
+    for i in 0..N {
+        assert_eq!(t.x_m[i], pos_mm(i) * 1e-3);
+        assert_eq!(t.ref_x_m.as_ref().unwrap()[i], pos_mm(i) * 3.0 * 1e-3);
+    }
+}
