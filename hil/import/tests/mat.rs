@@ -278,7 +278,11 @@ scipy.io.savemat(r"{}", {{
     ] {
         assert!(names.contains(&n), "{n} not in {names:?}");
     }
-    let time = inv.entries.iter().find(|e| e.name == "logsout.time").unwrap();
+    let time = inv
+        .entries
+        .iter()
+        .find(|e| e.name == "logsout.time")
+        .unwrap();
     assert_eq!(time.rate_hz, Some(2000.0));
     let values = inv
         .entries
