@@ -362,8 +362,8 @@ fn cut_file(log: &Log, map: &Map, zero_cols: &[&'static str]) -> Result<Cutout, 
         columns.push((col, read(src)?));
     }
     // The log's clock: (rate, time of its first sample).
-    let (rate_hz, t0, time_values) = match &map.time {
-        Time::Rate(r) => (*r, 0.0, None),
+    let (rate_hz, t0) = match &map.time {
+        Time::Rate(r) => (*r, 0.0),
         Time::Var(src) => {
             let t = read(src)?;
             let decimals = if log.row_lines.is_some() {
@@ -372,7 +372,7 @@ fn cut_file(log: &Log, map: &Map, zero_cols: &[&'static str]) -> Result<Cutout, 
                 None
             };
             match uniform_rate(&t, time_tolerance(decimals, src.scale)) {
-                UniformFit::Rate(r) => (r, t[0], Some(t)),
+                UniformFit::Rate(r) => (r, t[0]),
                 UniformFit::TooShort => {
                     return Err(ImportError::WrongShape {
                         file: log.path.clone(),
@@ -399,7 +399,6 @@ fn cut_file(log: &Log, map: &Map, zero_cols: &[&'static str]) -> Result<Cutout, 
             }
         }
     };
-    let _ = time_values;
     let marker = match &map.cut {
         Cut::Marker { source, .. } => Some(read(source)?),
         _ => None,

@@ -747,12 +747,6 @@ impl Map {
 
         // [trials]
         let tr = raw.trials.get_ref();
-        let trials_line = loc.table_line("trials", &raw.trials.span());
-        let trials_at = |key: &str| MapAt {
-            map: path.to_path_buf(),
-            line: trials_line,
-            key: key.to_string(),
-        };
         let cut_name = tr.cut.get_ref().as_str();
         let cut_at = loc.at_key(&tr.cut.span(), "trials.cut");
         // Keys that belong to another cut are errors, not silently ignored.
@@ -915,7 +909,6 @@ impl Map {
                 ));
             }
         };
-        let _ = trials_at;
         let trial_kind = TrialKind::from(tr.kind.clone().unwrap_or_else(|| "reach".into()));
 
         // [perturbation]
@@ -1021,7 +1014,7 @@ impl Map {
             channels,
             device,
             force_sensor,
-            subject_id: raw.subject.as_ref().and(subject_id),
+            subject_id,
             shoulder_m,
             upper_arm_m,
             forearm_m,

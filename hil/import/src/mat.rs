@@ -384,7 +384,7 @@ impl Walker<'_> {
                         })
                         .collect()
                 };
-                var.note_struct(&fields);
+                var.class = format!("struct ({} fields)", fields.len());
                 out.push(var);
                 let mut at = names_el.next;
                 for k in 0..count {
@@ -416,10 +416,7 @@ impl Walker<'_> {
                 }
             }
             6..=15 if !complex => {
-                var.values = Some(
-                    self.numeric(m, &flags, &dims_el, &name_el, count)
-                        .map_err(ctx)?,
-                );
+                var.values = Some(self.numeric(m, &dims_el, &name_el, count).map_err(ctx)?);
                 out.push(var);
             }
             6..=15 => {
@@ -437,7 +434,6 @@ impl Walker<'_> {
     fn numeric(
         &self,
         m: &[u8],
-        flags: &Element<'_>,
         dims: &Element<'_>,
         name: &Element<'_>,
         count: usize,
@@ -445,7 +441,6 @@ impl Walker<'_> {
         let e = self.endian;
         let mut body = Vec::with_capacity(m.len() + 8);
         body.extend_from_slice(&m[..dims.next.min(m.len())]);
-        let _ = flags;
         body.extend_from_slice(&e.bytes(MI_INT8 | (1 << 16)));
         body.extend_from_slice(b"v\0\0\0");
         body.extend_from_slice(m.get(name.next..).unwrap_or(&[]));
@@ -491,11 +486,5 @@ impl Walker<'_> {
             ));
         }
         Ok(values)
-    }
-}
-
-impl Var {
-    fn note_struct(&mut self, fields: &[String]) {
-        self.class = format!("struct ({} fields)", fields.len());
     }
 }

@@ -42,11 +42,6 @@ fn trig(i: usize) -> bool {
     i >= 100 && (i - 100) % 1000 < 50
 }
 
-const SCRIPT: &str = r#"
-import numpy as np, scipy.io, sys
-path, compress = sys.argv[1], sys.argv[2] == "1"
-"#;
-
 fn write_mat(path: &Path, compress: bool) {
     let script = format!(
         r#"
@@ -73,7 +68,6 @@ scipy.io.savemat(r"{path}", {{
         path = path.display(),
         compress = if compress { "True" } else { "False" },
     );
-    let _ = SCRIPT;
     python(&script);
 }
 
