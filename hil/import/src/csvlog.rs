@@ -1,0 +1,213 @@
+//! Continuous text logs: CSV, TSV or semicolon-separated, one sample per row.
+//!
+//! The delimiter is the map's `csv.delimiter` or sniffed from the first line that is
+//! not a comment (a tab makes TSV; more semicolons than commas, semicolons; else
+//! commas). The first row is a header unless `csv.header = false`, or, when the map
+//! does not say, unless every field of it is a number; without a header the columns are
+//! `col1`, `col2`, …. Lines starting with `#` and blank lines are skipped; CRLF line
+//! ends and a UTF-8 byte-order mark are accepted, and errors give the file's own line
+//! numbers (every line counts, comments included). Fields are trimmed; a field may be
+//! double-quoted (a header `"x, mm"`), but a quoted field may not span lines. A field that is not a number is an error only if the map uses its column.
+
+use std::path::Path;
+
+use crate::error::ImportError;
+use crate::log::{Log, Var, decimals};
+use crate::map::CsvOptions;
+
+fn sniff(text: &str) -> u8 {
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+        .unwrap_or("");
+    let count = |c: char| first.matches(c).count();
+    if count('\t') > 0 {
+        b'\t'
+    } else if count(';') > count(',') {
+        b';'
+    } else {
+        b','
+    }
+}
+
+/// Splits one line at `delim` into trimmed fields; a field may be double-quoted (`""`
+/// inside is a quote), so that a header such as `"x, mm"` is one field.
+fn split(line: &str, delim: char, out: &mut Vec<String>) -> Result<(), String> {
+    out.clear();
+    let mut field = String::new();
+    let mut chars = line.chars().peekable();
+    let mut quoted = false;
+    let mut was_quoted = false;
+    while let Some(c) = chars.next() {
+        if quoted {
+            if c == '"' {
+                if chars.peek() == Some(&'"') {
+                    field.push('"');
+                    chars.next();
+                } else {
+                    quoted = false;
+                }
+            } else {
+                field.push(c);
+            }
+        } else if c == delim {
+            out.push(if was_quoted {
+                std::mem::take(&mut field)
+            } else {
+                std::mem::take(&mut field).trim().to_string()
+            });
+            was_quoted = false;
+        } else if c == '"' && field.trim().is_empty() {
+            field.clear();
+            quoted = true;
+            was_quoted = true;
+        } else {
+            field.push(c);
+        }
+    }
+    if quoted {
+        return Err("a quoted field is not closed on its line".into());
+    }
+    out.push(if was_quoted {
+        field
+    } else {
+        field.trim().to_string()
+    });
+    Ok(())
+}
+
+fn parse_number(text: &str) -> Option<f64> {
+    let t = text.trim();
+    if t.is_empty() {
+        return None;
+    }
+    t.parse::<f64>().ok()
+}
+
+/// Reads a text log.
+pub(crate) fn read(path: &Path, bytes: &[u8], opts: &CsvOptions) -> Result<Log, ImportError> {
+    let bytes = bytes.strip_prefix(b"\xef\xbb\xbf").unwrap_or(bytes);
+    let csv_error = |line: usize, message: String| ImportError::Csv {
+        file: path.to_path_buf(),
+        line,
+        message,
+    };
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        let line = 1 + bytes[..e.valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        csv_error(line, "not UTF-8 text".into())
+    })?;
+    let delimiter = opts.delimiter.unwrap_or_else(|| sniff(text));
+    let mut names: Vec<String> = Vec::new();
+    let mut columns: Vec<Vec<f64>> = Vec::new();
+    let mut bad: Vec<Option<(usize, String)>> = Vec::new();
+    let mut dec: Vec<Option<i32>> = Vec::new();
+    let mut lines: Vec<usize> = Vec::new();
+    let mut header_line = 0;
+    let mut record: Vec<String> = Vec::new();
+    for (k, raw) in text.split('\n').enumerate() {
+        let line = k + 1;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        if raw.trim_start().starts_with('#') {
+            continue;
+        }
+        split(raw, char::from(delimiter), &mut record).map_err(|m| csv_error(line, m))?;
+        // A line holding only blanks and delimiters.
+        if record.iter().all(String::is_empty) {
+            continue;
+        }
+        if names.is_empty() {
+            let numeric = record.iter().all(|f| parse_number(f).is_some());
+            let header = opts.header.unwrap_or(!numeric);
+            let n = record.len();
+            columns = vec![Vec::new(); n];
+            bad = vec![None; n];
+            dec = vec![None; n];
+            if header {
+                header_line = line;
+                for (k, f) in record.iter().enumerate() {
+                    let name = if f.is_empty() {
+                        format!("col{}", k + 1)
+                    } else {
+                        f.clone()
+                    };
+                    if names.contains(&name) {
+                        return Err(csv_error(line, format!("column `{name}` appears twice")));
+                    }
+                    names.push(name);
+                }
+                continue;
+            }
+            names = (1..=n).map(|k| format!("col{k}")).collect();
+        }
+        if record.len() != names.len() {
+            return Err(csv_error(
+                line,
+                format!(
+                    "{} fields, the {} has {}",
+                    record.len(),
+                    if header_line > 0 {
+                        format!("header (line {header_line})")
+                    } else {
+                        "first row".to_string()
+                    },
+                    names.len()
+                ),
+            ));
+        }
+        let row = lines.len();
+        for (k, f) in record.iter().enumerate() {
+            match parse_number(f) {
+                Some(v) => {
+                    columns[k].push(v);
+                    if v.is_finite() {
+                        let d = decimals(f);
+                        dec[k] = Some(dec[k].map_or(d, |m: i32| m.min(d)));
+                    }
+                }
+                None => {
+                    columns[k].push(f64::NAN);
+                    if bad[k].is_none() {
+                        bad[k] = Some((row, f.clone()));
+                    }
+                }
+            }
+        }
+        lines.push(line);
+    }
+    if lines.is_empty() {
+        return Err(csv_error(
+            header_line.max(1),
+            "the log has no data rows".into(),
+        ));
+    }
+    let n = lines.len();
+    let vars = names
+        .into_iter()
+        .zip(columns)
+        .zip(bad.into_iter().zip(dec))
+        .map(|((name, values), (bad, decimals))| Var {
+            name,
+            shape: vec![n, 1],
+            class: if bad.is_some() { "text" } else { "double" }.into(),
+            values: Some(values),
+            bad,
+            decimals,
+        })
+        .collect();
+    let format = match delimiter {
+        b'\t' => "TSV (tab-separated)".to_string(),
+        b',' => "CSV (comma-separated)".to_string(),
+        b';' => "CSV (semicolon-separated)".to_string(),
+        d => format!("text, separated by {:?}", char::from(d)),
+    };
+    Ok(Log {
+        path: path.to_path_buf(),
+        format,
+        vars,
+        row_lines: Some(lines),
+    })
+}
