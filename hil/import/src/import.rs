@@ -522,8 +522,10 @@ fn cut_ranges(
             length_s,
         } => {
             let m = marker.unwrap_or(&[]);
-            let starts: Vec<usize> = (1..m.len())
-                .filter(|&i| m[i] > *above && m[i - 1] <= *above)
+            // A log that starts with the marker high starts with a trial (a logger
+            // armed by the trigger itself).
+            let starts: Vec<usize> = (0..m.len())
+                .filter(|&i| m[i] > *above && (i == 0 || m[i - 1] <= *above))
                 .collect();
             if starts.is_empty() {
                 return Err(ImportError::MarkerNeverRises {

@@ -143,9 +143,9 @@
 //! given. Each trial's `t_s` starts at 0 and is uniform at the rate.
 //! - `cut = "whole"`: the whole log is one trial.
 //! - `cut = "marker"`, `marker = { var, column, above }` (`above` default 0.5): a
-//!   trial starts at each rising edge (a sample above `above` after one at or below it;
-//!   a log that starts high does not start a trial there) and ends before the next
-//!   edge, or at the log's end. With `length_s`, each trial is that long instead (an
+//!   trial starts at each rising edge (a sample above `above` after one at or below it,
+//!   or the log's first sample if it is above: a logger armed by the trigger starts on
+//!   it) and ends before the next edge, or at the log's end. With `length_s`, each trial is that long instead (an
 //!   error if it runs past the log's end). A marker that never rises is
 //!   [`ImportError::MarkerNeverRises`].
 //! - `cut = "onsets"`: `onsets_s = [0.0, 2.5, 5.0]` (increasing, s), or `onsets = { var,

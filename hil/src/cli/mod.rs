@@ -10,6 +10,7 @@ pub mod compare;
 pub mod controller;
 pub mod diagnose;
 pub mod estimate;
+pub mod import;
 pub mod inspect;
 pub mod link;
 pub mod plant;
@@ -25,6 +26,7 @@ pub mod view;
 Examples:
   rigtwin inspect ../shared/recordings/example-none
   rigtwin inspect session/ --json
+  rigtwin import log.mat --map map.toml --out session/
   rigtwin rehearse hil/protocols/reach-perturb.toml
   rigtwin estimate ../shared/recordings/example-none
   rigtwin plant serve reach-perturb --listen 127.0.0.1:47000
@@ -41,6 +43,8 @@ pub struct Cli {
 pub enum Command {
     /// Summarise a recorded session: manifest, channels, one line per trial.
     Inspect(inspect::Args),
+    /// Turn a lab's measured logs (.mat, CSV/TSV) into a session through a map file.
+    Import(import::Args),
     /// Rehearse a protocol against virtual subjects: sessions plus a report.
     Rehearse(rehearse::Args),
     /// Estimate impedance from a session's perturbed trials (measured or simulated).
@@ -100,6 +104,7 @@ pub fn trial_bar(len: u64, template: &str) -> indicatif::ProgressBar {
 pub fn run(cli: &Cli) -> anyhow::Result<()> {
     match &cli.command {
         Command::Inspect(args) => inspect::run(args),
+        Command::Import(args) => import::run(args),
         Command::Rehearse(args) => rehearse::run(args),
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),

@@ -1059,6 +1059,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     const MIN_TRIALS: usize = 4;
     // A continuous log imported as one or a few long trials: its folds are blocks of
     // time, so that held-out gains stay held out.
+    let trials_used = signals.len();
     let signals = if signals.len() < MIN_TRIALS {
         in_blocks(signals, BLOCK_S)
     } else {
@@ -1069,7 +1070,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let mut d = Diagnosis {
         session: session.dir.display().to_string(),
         trials_total: session.trials.len(),
-        trials_used: signals.len(),
+        trials_used,
         rate_hz: rate,
         folds: 0,
         cause: "none".to_string(),
@@ -1425,11 +1426,23 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             ),
         });
     }
+    if session.manifest.axes != Axes::Both {
+        d.ranking = std::mem::take(&mut ranking);
+        only_present_axes(&mut d, session.manifest.axes);
+        ranking = std::mem::take(&mut d.ranking);
+    }
     d.evidence = evidence(&d, &ranking, cart_nrmse, hand.as_ref());
     if !corrected.is_empty() {
         d.evidence.push(format!(
             "the hand balance judged the sensor force {}",
             corrected.join(", ")
+        ));
+    }
+    if signals.len() != trials_used {
+        d.evidence.push(format!(
+            "the {trials_used} trial(s) with motor command were cut into {} blocks of at least {BLOCK_S} s \
+             as the units of cross-validation (fewer than {MIN_TRIALS} trials)",
+            signals.len()
         ));
     }
     if !plant_ok {
@@ -1440,9 +1453,6 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
     d.not_judged = not_judged;
     d.ranking = ranking;
-    if session.manifest.axes != Axes::Both {
-        only_present_axes(&mut d, session.manifest.axes);
-    }
     let fits = plant_ranked.into_iter().map(|(_, f)| f).collect();
     Ok(Analysis {
         diagnosis: d,
@@ -1462,7 +1472,37 @@ fn evidence(
 ) -> Vec<String> {
     let mut ev = Vec::new();
     let g = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
-    if let Some(cart) = cart_nrmse {
+    let planar_sensed = d.baseline.contains_key("moving_mass_y_kg")
+        && d.baseline.contains_key("motor_force_gain_x");
+    if let (Some(cart), false) = (cart_nrmse, planar_sensed) {
+        let masses: Vec<String> = ["x", "y"]
+            .iter()
+            .filter_map(|a| {
+                d.baseline
+                    .get(&format!("moving_mass_{a}_kg"))
+                    .map(|m| format!("moving mass {a} {m:.3} kg"))
+            })
+            .collect();
+        let offsets: Vec<String> = ["x", "y"]
+            .iter()
+            .filter_map(|a| {
+                d.baseline
+                    .get(&format!("offset_{a}_n"))
+                    .map(|o| format!("constant force {a} {o:.3} N"))
+            })
+            .collect();
+        ev.push(format!(
+            "nominal cart balance on the rig's axes: {}{}; latency {:.3} ms; held-out NRMSE {cart:.4}{}",
+            masses.join(", "),
+            if offsets.is_empty() { String::new() } else { format!(", {}", offsets.join(", ")) },
+            g("latency_ms"),
+            if offsets.is_empty() {
+                ""
+            } else {
+                " (no force sensor: the command's scale is the map's, the rows near rest are left out)"
+            }
+        ));
+    } else if let Some(cart) = cart_nrmse {
         ev.push(format!(
             "nominal cart balance: moving mass x {:.3} kg (both carts), y {:.3} kg (upper cart), latency {:.3} ms; held-out NRMSE {:.4}",
             g("moving_mass_x_kg"),

@@ -418,7 +418,8 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
     )))
 }
 
-/// A held-out trial of fold 0 (a perturbed one if there is), y axis: measured motor
+/// A held-out trial of fold 0 (a perturbed one if there is), y axis (or a one-axis rig's
+/// axis): measured motor
 /// command against what the baseline and the extended model say it must have been.
 fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, DiscrepancyError> {
     let Some(base) = &a.baseline else {
@@ -443,7 +444,9 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
     let re = cf
         .candidate
         .residual(sig, ef.setting, &ef.beta, a.latency_s)?;
-    let u = sig.at_rows(&sig.u[1]);
+    // The y axis (it carries the reach on the planar rig), or the only axis a rig has.
+    let axis = usize::from(sig.present(1));
+    let u = sig.at_rows(&sig.u[axis]);
     let t: Vec<f64> = sig.rows.iter().map(|i| *i as f64 / sig.rate_hz).collect();
     let line = |pred: Option<&Vec<f64>>| -> Vec<(f64, f64)> {
         t.iter()
@@ -453,7 +456,11 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
             .collect()
     };
     Ok(Some(Figure {
-        title: format!("held-out trial {} (y axis): motor command", sig.id),
+        title: format!(
+            "held-out trial {} ({} axis): motor command",
+            sig.id,
+            ["x", "y"][axis]
+        ),
         x_desc: "time (s)".into(),
         y_desc: "motor force (N)".into(),
         series: vec![
@@ -465,13 +472,13 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
             },
             Series {
                 label: "baseline".into(),
-                points: line(Some(&rb[1])),
+                points: line(Some(&rb[axis])),
                 style: Style::Line,
                 rgb: (30, 90, 200),
             },
             Series {
                 label: format!("extended ({})", cf.candidate.name()),
-                points: line(Some(&re[1])),
+                points: line(Some(&re[axis])),
                 style: Style::Line,
                 rgb: (210, 50, 40),
             },
