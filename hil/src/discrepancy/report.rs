@@ -134,7 +134,18 @@ pub fn table(d: &Diagnosis) -> String {
             "rank", "candidate", "balance", "gain %", "NRMSE", "t", "verdict"
         );
         for (i, r) in d.ranking.iter().enumerate() {
-            let verdict = verdict(r, d.causes.iter().any(|c| c.name == r.name));
+            // A cause named only given others (forward selection) is "jointly" here,
+            // where it stands alone; its CAUSE line is in the rounds below.
+            let alone = d
+                .causes
+                .iter()
+                .any(|c| c.name == r.name && c.given.is_empty());
+            let later = d.causes.iter().any(|c| c.name == r.name);
+            let verdict = if later && !alone && !r.significant {
+                "jointly"
+            } else {
+                verdict(r, later)
+            };
             let _ = writeln!(
                 out,
                 "{:<4} {:<16} {:<7} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
@@ -146,6 +157,17 @@ pub fn table(d: &Diagnosis) -> String {
                 r.t_statistic,
                 verdict,
                 fmt_params(&r.parameters, &r.parameter_se)
+            );
+        }
+        if d.ranking.iter().any(|r| {
+            !r.significant
+                && d.causes
+                    .iter()
+                    .any(|c| c.name == r.name && !c.given.is_empty())
+        }) {
+            let _ = writeln!(
+                out,
+                "(jointly: nothing alone, named given the causes before it; see the forward selection)"
             );
         }
         for r in d
