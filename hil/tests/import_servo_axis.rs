@@ -143,3 +143,35 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
         );
     }
 }
+
+/// The other commands accept the one-axis session: `inspect` names the axis, and
+/// `estimate` and `compare`, which need a subject's planar arm, say that nothing of
+/// theirs applies and where to go instead, and succeed (the session is valid).
+#[test]
+fn inspect_estimate_and_compare_accept_a_one_axis_session() {
+    let session = root().join("recordings/example-servo-axis");
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
+            .args(args)
+            .arg(&session)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    assert!(run(&["inspect"]).contains("one axis (x"), "inspect");
+    let inspected: serde_json::Value = serde_json::from_str(&run(&["inspect", "--json"])).unwrap();
+    assert_eq!(inspected["axes"], serde_json::json!(["x"]));
+    for cmd in ["estimate", "compare"] {
+        let v: serde_json::Value = serde_json::from_str(&run(&[cmd, "--json"])).unwrap();
+        assert_eq!(v["applicable"], false, "{cmd}: {v}");
+        assert!(
+            v["reason"].as_str().unwrap().contains("rigtwin diagnose"),
+            "{cmd}: {v}"
+        );
+    }
+}
