@@ -8,7 +8,10 @@
 //! ```
 //!
 //! Arguments: seed, output folder (new or empty); optional third: number of moves
-//! (default 40). Prints the axis's true parameters.
+//! (default 40). Variants of the bench axis through the environment:
+//! `SERVO_DELAY_TICKS`, `SERVO_COGGING_N`, `SERVO_STRIBECK_N`, `SERVO_KI`,
+//! `SERVO_NOISE_N`, `SERVO_OFFSET_N`, `SERVO_COULOMB_N`, `SERVO_VISCOUS`,
+//! `SERVO_MASS_KG`. Prints the axis's true parameters.
 
 use rigtwin_tests::servo_axis::{ServoAxis, log_csv, run, write_session};
 
@@ -26,8 +29,25 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         None => 40,
     };
     let mut axis = ServoAxis::bench();
-    if let Ok(d) = std::env::var("SERVO_DELAY_TICKS") {
+    // Variants of the bench axis for looking at the diagnosis by hand.
+    let env = |k: &str| std::env::var(k).ok();
+    let num = |k: &str, v: String| v.parse::<f64>().map_err(|e| format!("{k}: {e}"));
+    if let Some(d) = env("SERVO_DELAY_TICKS") {
         axis.delay_ticks = d.parse().map_err(|e| format!("SERVO_DELAY_TICKS: {e}"))?;
+    }
+    for (k, field) in [
+        ("SERVO_COGGING_N", &mut axis.cogging_n),
+        ("SERVO_STRIBECK_N", &mut axis.stribeck_n),
+        ("SERVO_KI", &mut axis.ki),
+        ("SERVO_NOISE_N", &mut axis.noise_n),
+        ("SERVO_OFFSET_N", &mut axis.offset_n),
+        ("SERVO_COULOMB_N", &mut axis.coulomb_n),
+        ("SERVO_VISCOUS", &mut axis.viscous_n_s_per_m),
+        ("SERVO_MASS_KG", &mut axis.mass_kg),
+    ] {
+        if let Some(v) = env(k) {
+            *field = num(k, v)?;
+        }
     }
     let log = run(&axis, moves, 0.1, seed);
     std::fs::create_dir_all(&out)?;

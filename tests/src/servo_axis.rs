@@ -45,6 +45,12 @@ pub struct ServoAxis {
     pub coulomb_n: f64,
     /// Viscous friction, N s/m.
     pub viscous_n_s_per_m: f64,
+    /// Stribeck excess of static over Coulomb friction, N (0: none): the friction in
+    /// motion is `(F_c + F_s e^{−(v/v_s)²}) sgn(v) + b v`, and at rest the carriage sticks
+    /// while the other forces stay within `F_c + F_s`. Not in the diagnosis's catalog.
+    pub stribeck_n: f64,
+    /// Stribeck speed `v_s`, m/s.
+    pub stribeck_speed_m_per_s: f64,
     /// Constant force on the carriage, N.
     pub offset_n: f64,
     /// Cogging amplitude, N (0: none).
@@ -83,6 +89,8 @@ impl ServoAxis {
             mass_kg,
             coulomb_n: 4.5,
             viscous_n_s_per_m: 12.0,
+            stribeck_n: 0.0,
+            stribeck_speed_m_per_s: 0.005,
             offset_n: -1.5,
             cogging_n: 0.8,
             cogging_pitch_m: 0.032,
@@ -200,11 +208,13 @@ pub fn run(axis: &ServoAxis, moves: usize, half_range_m: f64, seed: u64) -> Serv
             let cog = axis.cogging_n
                 * (2.0 * std::f64::consts::PI * x / axis.cogging_pitch_m + phase).sin();
             let f = drive + cog;
-            if v == 0.0 && f.abs() <= axis.coulomb_n {
+            if v == 0.0 && f.abs() <= axis.coulomb_n + axis.stribeck_n {
                 continue; // stuck
             }
             let dir = if v == 0.0 { f.signum() } else { v.signum() };
-            let a = (f - axis.coulomb_n * dir - axis.viscous_n_s_per_m * v) / axis.mass_kg;
+            let sliding = axis.coulomb_n
+                + axis.stribeck_n * (-(v / axis.stribeck_speed_m_per_s).powi(2)).exp();
+            let a = (f - sliding * dir - axis.viscous_n_s_per_m * v) / axis.mass_kg;
             let v_new = v + a * h;
             // Friction cannot reverse the motion within a substep: it stops it.
             v = if v != 0.0 && v_new.signum() != v.signum() {
