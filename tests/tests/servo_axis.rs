@@ -126,3 +126,24 @@ fn a_servo_axis_with_friction_alone_names_friction_alone() {
     );
     assert!(d.unexplained.is_none(), "{:?}", d.unexplained);
 }
+
+/// A command logged with the opposite sign (a map's scale of the wrong sign) is an
+/// error that says so, not a diagnosis of "friction that drives the motion".
+#[test]
+fn a_reversed_command_is_an_error_naming_the_sign() {
+    let axis = ServoAxis::bench();
+    let mut log = run(&axis, 12, 0.1, 3);
+    log.cmd_v.iter_mut().for_each(|u| *u = -*u);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("session");
+    write_session(&log, &axis, &path).unwrap();
+    let session = Session::read(&path).unwrap();
+    let e = diagnose(&session, &DiagnoseOptions::default())
+        .err()
+        .expect("a reversed command must not diagnose");
+    let text = e.to_string();
+    assert!(
+        text.contains("moving mass of the x axis is -") && text.contains("reversed"),
+        "{text}"
+    );
+}

@@ -1129,6 +1129,13 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         )?;
         let base_nrmse = baseline.nrmse();
         d.baseline = nominal_parameters(&baseline.beta, &signals);
+        for axis in ["x", "y"] {
+            if let Some(&m) = d.baseline.get(&format!("moving_mass_{axis}_kg"))
+                && m <= 0.0
+            {
+                return Err(DiscrepancyError::NegativeMass { axis, mass_kg: m });
+            }
+        }
         d.baseline.insert("latency_ms".to_string(), latency_s * 1e3);
         let travel = signals
             .iter()

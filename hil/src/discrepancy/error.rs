@@ -50,6 +50,19 @@ pub enum DiscrepancyError {
         /// Which fit.
         what: String,
     },
+    /// The nominal balance wants a moving mass that is not positive: the command and
+    /// the position have opposite signs (a map's scale of the wrong sign, a motor wired
+    /// the other way round), and no judgement of the session would mean anything.
+    #[error(
+        "the fitted moving mass of the {axis} axis is {mass_kg:.3} kg: the motor command pushes against the measured motion, so \
+         the command's sign (the import map's scale, the motor's wiring) or the position's is reversed; flip one and diagnose again"
+    )]
+    NegativeMass {
+        /// `x` or `y`.
+        axis: &'static str,
+        /// The fitted mass, kg.
+        mass_kg: f64,
+    },
     /// Writing a report or a plot failed.
     #[error("writing {path}: {reason}")]
     Write {
