@@ -138,9 +138,9 @@ fn a_reversed_command_is_an_error_naming_the_sign() {
     let path = dir.path().join("session");
     write_session(&log, &axis, &path).unwrap();
     let session = Session::read(&path).unwrap();
-    let e = diagnose(&session, &DiagnoseOptions::default())
-        .err()
-        .expect("a reversed command must not diagnose");
+    let Err(e) = diagnose(&session, &DiagnoseOptions::default()) else {
+        panic!("a reversed command must not diagnose");
+    };
     let text = e.to_string();
     assert!(
         text.contains("moving mass of the x axis is -") && text.contains("reversed"),
