@@ -70,8 +70,10 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
         );
     }
 
+    let model_file = dir.path().join("model.toml");
     let diag = Command::new(env!("CARGO_BIN_EXE_rigtwin"))
-        .args(["diagnose", "--json", "--no-report"])
+        .args(["diagnose", "--json", "--no-report", "--write-model"])
+        .arg(&model_file)
         .arg(&out)
         .output()
         .unwrap();
@@ -125,6 +127,16 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
     within("pitch", cause("force-ripple", "pitch_m"), 0.032, 0.02);
     within("delay", cause("actuation-delay", "delay_ms"), 1.5, 0.34);
     assert!(d["unexplained"].is_null(), "{}", d["unexplained"]);
+    // The written model carries every cause, the cogging on x alone, and the masses
+    // fitted with the causes (none on the absent y axis).
+    let m = rigtwin::discrepancy::ExtendedModel::read(&model_file).unwrap();
+    assert_eq!(m.causes, names, "{m:?}");
+    let ripple = m.effects.force_ripple.expect("the cogging is in the model");
+    within("model cogging", ripple.amplitude_n[0], 0.8, 0.10);
+    assert!(ripple.amplitude_n[1] == 0.0, "{ripple:?}");
+    assert!(m.effects.rail_friction.is_some() && m.effects.actuation_delay.is_some());
+    within("model mass", m.moving_mass_x_kg, 3.2, 0.02);
+    assert!(m.moving_mass_y_kg == 0.0, "{m:?}");
     let not_judged: Vec<&str> = d["not_judged"]
         .as_array()
         .unwrap()

@@ -1129,11 +1129,16 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         )?;
         let base_nrmse = baseline.nrmse();
         d.baseline = nominal_parameters(&baseline.beta, &signals);
-        for axis in ["x", "y"] {
-            if let Some(&m) = d.baseline.get(&format!("moving_mass_{axis}_kg"))
-                && m <= 0.0
-            {
-                return Err(DiscrepancyError::NegativeMass { axis, mass_kg: m });
+        // Without a force sensor the command is the only force the balance knows, so a
+        // mass below zero means its sign is reversed. (With a sensor it need not: a
+        // strong unmodelled cable spring pulled the upper cart's baseline mass to −1.2 kg.)
+        if signals.iter().all(|s| !s.sensed) {
+            for axis in ["x", "y"] {
+                if let Some(&m) = d.baseline.get(&format!("moving_mass_{axis}_kg"))
+                    && m <= 0.0
+                {
+                    return Err(DiscrepancyError::NegativeMass { axis, mass_kg: m });
+                }
             }
         }
         d.baseline.insert("latency_ms".to_string(), latency_s * 1e3);

@@ -50,8 +50,8 @@ pub enum DiscrepancyError {
         /// Which fit.
         what: String,
     },
-    /// The nominal balance wants a moving mass that is not positive: the command and
-    /// the position have opposite signs (a map's scale of the wrong sign, a motor wired
+    /// The nominal balance of a rig without a force sensor wants a moving mass that is
+    /// not positive: the command and the position have opposite signs (a map's scale of the wrong sign, a motor wired
     /// the other way round), and no judgement of the session would mean anything.
     #[error(
         "the fitted moving mass of the {axis} axis is {mass_kg:.3} kg: the motor command pushes against the measured motion, so \

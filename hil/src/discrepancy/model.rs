@@ -33,9 +33,10 @@ pub struct ExtendedModel {
     pub causes: Vec<String>,
     /// Held-out gain of the model over the nominal balance.
     pub gain: f64,
-    /// Fitted moving mass of the x axis (both carts), kg.
+    /// Fitted moving mass of the x axis (both carts), kg, from the fit with the causes
+    /// (`Diagnosis::model`); 0 on a rig without that axis.
     pub moving_mass_x_kg: f64,
-    /// Fitted moving mass of the y axis (upper cart), kg.
+    /// Fitted moving mass of the y axis (upper cart), kg, as the x axis's.
     pub moving_mass_y_kg: f64,
     /// The effects, as `rigtwin_world::PlantEffects`.
     pub effects: PlantEffects,
@@ -72,13 +73,16 @@ fn add_effect(
             }
         }
         "force-ripple" => {
-            if let (Some(ax), Some(ay), Some(pitch), Some(px), Some(py)) = (
-                get(p, "amplitude_x_n"),
-                get(p, "amplitude_y_n"),
-                get(p, "pitch_m"),
-                get(p, "phase_x_rad"),
-                get(p, "phase_y_rad"),
-            ) {
+            // Each axis has its own amplitude and phase; a rig of one axis has only its
+            // own, and the other axis has no ripple.
+            let axis = |a: &str| {
+                get(p, &format!("amplitude_{a}_n"))
+                    .map(|amp| (amp, get(p, &format!("phase_{a}_rad"))))
+            };
+            let (x, y) = (axis("x"), axis("y"));
+            if let (Some(pitch), true) = (get(p, "pitch_m"), x.is_some() || y.is_some()) {
+                let (ax, px) = x.map_or((0.0, 0.0), |(a, ph)| (a, ph.unwrap_or(0.0)));
+                let (ay, py) = y.map_or((0.0, 0.0), |(a, ph)| (a, ph.unwrap_or(0.0)));
                 effects.force_ripple = Some(ForceRipple {
                     amplitude_n: [ax, ay],
                     pitch_m: pitch,
@@ -138,7 +142,19 @@ impl ExtendedModel {
         for c in &d.causes {
             add_effect(&mut effects, &mut stretch_reflex, &c.name, &c.parameters);
         }
-        let m = |k: &str| d.baseline.get(k).copied().unwrap_or(f64::NAN);
+        // The masses fitted with the causes (`Diagnosis::model`); an axis a rig lacks has
+        // none, and is written as 0 (nothing moves on it).
+        let nominal = if d.model.is_empty() {
+            &d.baseline
+        } else {
+            &d.model
+        };
+        let m = |k: &str| {
+            nominal
+                .get(k)
+                .copied()
+                .unwrap_or(if nominal.is_empty() { f64::NAN } else { 0.0 })
+        };
         ExtendedModel {
             fitted_to: d.session.clone(),
             cause: d.cause.clone(),
