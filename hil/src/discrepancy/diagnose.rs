@@ -991,9 +991,7 @@ fn in_blocks(signals: Vec<BalanceSignals>, block_s: f64) -> Vec<BalanceSignals> 
                     } else {
                         (b + 1) * len
                     };
-                    let mut piece = s.clone();
-                    piece.rows = s.rows[b * len..end].to_vec();
-                    piece
+                    s.block(&s.rows[b * len..end])
                 })
                 .collect::<Vec<_>>()
         })

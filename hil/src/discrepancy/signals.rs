@@ -184,6 +184,42 @@ impl BalanceSignals {
         self
     }
 
+    /// The part of this trial around the evaluated rows `rows` (a subset of
+    /// [`Self::rows`], in order), as a trial of its own: every full-rate channel cut to
+    /// the rows' span plus a margin of a smoothing window and the longest delay searched
+    /// on each side, so that everything evaluated at the rows (smoothed regressors,
+    /// delayed commands) has the values it has in the whole trial. A long continuous
+    /// log's blocks are cut so: with whole copies, each block's work scaled with the
+    /// log's length (a ten-minute log took 8 min to diagnose).
+    #[must_use]
+    pub fn block(&self, rows: &[usize]) -> BalanceSignals {
+        let n = self.q[0].len();
+        let margin = self.window + (super::delay::MAX_DELAY_S * self.rate_hz).ceil() as usize + 2;
+        let (first, last) = (
+            rows.first().copied().unwrap_or(0),
+            rows.last().copied().unwrap_or(0),
+        );
+        let lo = first.saturating_sub(margin);
+        let hi = (last + margin + 1).min(n);
+        let cut = |x: &[Vec<f64>; 2]| [x[0][lo..hi].to_vec(), x[1][lo..hi].to_vec()];
+        BalanceSignals {
+            id: self.id,
+            perturbed: self.perturbed,
+            rate_hz: self.rate_hz,
+            window: self.window,
+            decim: self.decim,
+            q: cut(&self.q),
+            v: cut(&self.v),
+            a: cut(&self.a),
+            u: cut(&self.u),
+            f: cut(&self.f),
+            force_taps: self.force_taps.clone(),
+            rows: rows.iter().map(|r| r - lo).collect(),
+            axes: self.axes,
+            sensed: self.sensed,
+        }
+    }
+
     /// Whether `axis` contributes rows to the balance.
     #[must_use]
     pub fn present(&self, axis: usize) -> bool {
