@@ -3,7 +3,6 @@
 //! from the measurement, and how the estimator's D and K differ.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
@@ -182,27 +181,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
     if session.manifest.axes != rigtwin::session::Axes::Both {
-        // Nothing of this command applies: say so and succeed (the session is valid).
-        let reason = "compare re-simulates the planar rig with a subject's arm fitted to the session; a rig of one axis has no subject to fit. What applies to it is `rigtwin diagnose`, which judges the axis's own force balance with held-out gains and writes the model it finds";
-        let axes = session.manifest.axes.names();
-        let text = if args.json {
-            serde_json::to_string_pretty(&serde_json::json!({
-                "session": args.session.display().to_string(),
-                "axes": axes,
-                "applicable": false,
-                "reason": reason,
-            }))
-            .context("formatting the answer as JSON")?
-        } else {
-            format!(
-                "session {}: one axis ({}); nothing to compare: {reason}",
-                args.session.display(),
-                axes.join("")
-            )
-        };
-        let mut out = std::io::stdout().lock();
-        writeln!(out, "{text}").context("writing to standard output")?;
-        return Ok(());
+        return super::not_applicable(
+            &args.session,
+            &session,
+            args.json,
+            "compare",
+            "compare re-simulates the planar rig with a subject's arm fitted to the session; a rig of one axis has no subject to fit. What applies to it is `rigtwin diagnose`, which judges the axis's own force balance with held-out gains and writes the model it finds",
+        );
     }
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
     let mut options = CompareOptions::default();

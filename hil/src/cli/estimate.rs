@@ -1,6 +1,5 @@
 //! `rigtwin estimate`: the device's estimators on any session, measured or simulated.
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
@@ -150,27 +149,13 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
     if session.manifest.axes != rigtwin::session::Axes::Both {
-        // Nothing of this command applies: say so and succeed (the session is valid).
-        let reason = "the impedance estimators need a subject's planar arm and force pulses; a rig of one axis has neither. What applies to it is `rigtwin diagnose`, which identifies the axis itself (moving mass, friction, the constant force it holds against, cogging, delay)";
-        let axes = session.manifest.axes.names();
-        let text = if args.json {
-            serde_json::to_string_pretty(&serde_json::json!({
-                "session": args.session.display().to_string(),
-                "axes": axes,
-                "applicable": false,
-                "reason": reason,
-            }))
-            .context("formatting the answer as JSON")?
-        } else {
-            format!(
-                "session {}: one axis ({}); nothing to estimate: {reason}",
-                args.session.display(),
-                axes.join("")
-            )
-        };
-        let mut out = std::io::stdout().lock();
-        writeln!(out, "{text}").context("writing to standard output")?;
-        return Ok(());
+        return super::not_applicable(
+            &args.session,
+            &session,
+            args.json,
+            "estimate",
+            "the impedance estimators need a subject's planar arm and force pulses; a rig of one axis has neither. What applies to it is `rigtwin diagnose`, which identifies the axis itself (moving mass, friction, the constant force it holds against, cogging, delay)",
+        );
     }
     let has_pulses = session
         .manifest

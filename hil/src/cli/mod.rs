@@ -115,3 +115,38 @@ pub fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::View(args) => view::run(args),
     }
 }
+
+/// Says on stdout that nothing of command `what` applies to `session` (a rig of one
+/// axis), why (`reason`), and succeeds: the session is valid, and a script looping over
+/// a lab's sessions must not stop on it. With `json`, `{"applicable": false, ...}`.
+///
+/// # Errors
+/// Standard output cannot be written.
+pub fn not_applicable(
+    path: &std::path::Path,
+    session: &rigtwin::session::Session,
+    json: bool,
+    what: &str,
+    reason: &str,
+) -> anyhow::Result<()> {
+    use anyhow::Context as _;
+    use std::io::Write as _;
+    let axes = session.manifest.axes.names();
+    let text = if json {
+        serde_json::to_string_pretty(&serde_json::json!({
+            "session": path.display().to_string(),
+            "axes": axes,
+            "applicable": false,
+            "reason": reason,
+        }))
+        .context("formatting the answer as JSON")?
+    } else {
+        format!(
+            "session {}: one axis ({}); nothing to {what}: {reason}",
+            path.display(),
+            axes.join("")
+        )
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{text}").context("writing to standard output")
+}
