@@ -11,7 +11,7 @@
 //! (default 40). Variants of the bench axis through the environment:
 //! `SERVO_DELAY_TICKS`, `SERVO_COGGING_N`, `SERVO_STRIBECK_N`, `SERVO_KI`,
 //! `SERVO_NOISE_N`, `SERVO_OFFSET_N`, `SERVO_COULOMB_N`, `SERVO_VISCOUS`,
-//! `SERVO_MASS_KG`. Prints the axis's true parameters.
+//! `SERVO_MASS_KG`, `SERVO_ENCODER_M`, `SERVO_RATE_HZ`. Prints the axis's true parameters.
 
 use rigtwin_tests::servo_axis::{ServoAxis, log_csv, run, write_session};
 
@@ -44,6 +44,8 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         ("SERVO_COULOMB_N", &mut axis.coulomb_n),
         ("SERVO_VISCOUS", &mut axis.viscous_n_s_per_m),
         ("SERVO_MASS_KG", &mut axis.mass_kg),
+        ("SERVO_ENCODER_M", &mut axis.encoder_m),
+        ("SERVO_RATE_HZ", &mut axis.rate_hz),
     ] {
         if let Some(v) = env(k) {
             *field = num(k, v)?;
