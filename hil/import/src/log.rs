@@ -29,7 +29,7 @@ pub(crate) struct Var {
 pub(crate) struct Log {
     /// The file.
     pub path: PathBuf,
-    /// `MATLAB level 5`, `CSV (comma)`…
+    /// `MATLAB level 5`, `MATLAB v7.3 (HDF5)`, `CSV (comma)`…
     pub format: String,
     /// Variables in file order.
     pub vars: Vec<Var>,
@@ -54,7 +54,11 @@ impl Log {
             source: e,
         })?;
         if is_mat(path, &bytes) {
-            crate::mat::read(path, &bytes)
+            if crate::mat73::is_v73(&bytes) {
+                crate::mat73::read(path, bytes)
+            } else {
+                crate::mat::read(path, &bytes)
+            }
         } else {
             crate::csvlog::read(path, &bytes, csv)
         }
