@@ -211,6 +211,12 @@ from = "channel"
 above_n = 0.5
 "#;
 
+/// Flushes the machine's dirty pages (the generated logs, a removed session), so that
+/// an import is not timed writing back what the bench wrote before it. Best effort.
+fn sync() {
+    let _ = std::process::Command::new("sync").status();
+}
+
 fn bench(c: &mut Criterion) {
     let dir = tempfile::tempdir().unwrap();
     let cols = generate();
@@ -232,12 +238,16 @@ fn bench(c: &mut Criterion) {
         mb(&mat73)
     );
 
+    sync();
+
     let mut run = 0_usize;
     let mut fresh = |dir: &Path| -> PathBuf {
         // The previous output is removed before the next (outside the timing), so that
-        // the disk holds one session at a time.
+        // the disk holds one session at a time, and the removal is flushed, so that
+        // its writeback is not timed as the next import's.
         let old = dir.join(format!("out{run}"));
         let _ = std::fs::remove_dir_all(&old);
+        sync();
         run += 1;
         dir.join(format!("out{run}"))
     };
@@ -252,11 +262,17 @@ fn bench(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(60))
         .warm_up_time(Duration::from_secs(1));
     for (name, file) in [("csv", &csv), ("mat level 5", &mat), ("mat v7.3", &mat73)] {
+        // Reading alone (what `inspect` does: the whole log, parsed), then one import.
+        let start = Instant::now();
+        let inventory = rigtwin_import::inspect(file).unwrap();
+        let read_s = start.elapsed().as_secs_f64();
+        assert_eq!(inventory.entries.len(), COLUMNS.len());
         let out = fresh(dir.path());
         let start = Instant::now();
         let imported = rigtwin_import::import(std::slice::from_ref(file), &map, &out).unwrap();
         eprintln!(
-            "{name}: one import took {:.2} s ({} trials, {} perturbed)",
+            "{name}: reading took {read_s:.2} s; one import took {:.2} s ({} trials, {} \
+             perturbed)",
             start.elapsed().as_secs_f64(),
             imported.samples.len(),
             imported.perturbed
