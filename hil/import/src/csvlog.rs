@@ -275,9 +275,12 @@ pub(crate) fn read(path: &Path, bytes: &[u8], opts: &CsvOptions) -> Result<Log, 
     let cut = (rest.len() >= PARALLEL_BYTES
         && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1))
     .then(|| {
-        rest[rest.len() / 2..]
-            .find('\n')
-            .map(|i| rest.len() / 2 + i + 1)
+        // Just after a newline, so on a character boundary whatever the text holds.
+        let mid = rest.len() / 2;
+        rest.as_bytes()[mid..]
+            .iter()
+            .position(|&c| c == b'\n')
+            .map(|i| mid + i + 1)
     })
     .flatten();
     match cut {

@@ -345,21 +345,34 @@ fn a_large_log_parsed_in_two_halves_keeps_values_and_line_numbers() {
     const ROWS: usize = 200_000;
     let dir = tempfile::tempdir().unwrap();
     let value = |i: usize| (i % 1000) as f64 * 0.001_25 - 0.5 + (i / 1000) as f64 * 0.25;
-    // Line of each row: two comment lines and the header come first; a comment and a
-    // blank line sit after row 100 000 (near the middle) and CRLF ends every line.
+    // Line of each row: two comment lines and the header come first; comments and a
+    // blank line sit after row 100 400 (around the middle byte) and CRLF ends every
+    // line.
     let mut text = String::from("# big log\r\n# second comment\r\nt,x,idx\r\n");
     let mut line_of = Vec::with_capacity(ROWS);
     let mut line = 3;
+    let mut block = (0, 0);
     for i in 0..ROWS {
         line += 1;
         line_of.push(line);
         text.push_str(&format!("{:.6},{},{i}\r\n", i as f64 / 1000.0, value(i)));
-        if i == ROWS / 2 {
+        if i == 100_400 {
+            // A comment, a blank line and 200 kB of two-byte characters, where the
+            // halves are cut: the cut must fall on a line end, not inside a character.
             text.push_str("# a comment in the middle\r\n\r\n");
             line += 2;
+            block.0 = text.len();
+            for _ in 0..50 {
+                text.push_str(&format!("# {}\r\n", "é".repeat(2000)));
+                line += 1;
+            }
+            block.1 = text.len();
         }
     }
     assert!(text.len() > 4 << 20, "{} bytes", text.len());
+    let header = "# big log\r\n# second comment\r\nt,x,idx\r\n".len();
+    let mid = header + (text.len() - header) / 2;
+    assert!((block.0..block.1).contains(&mid), "{mid} outside {block:?}");
     let csv = write(dir.path(), "big.csv", &text);
     let map = write(
         dir.path(),
