@@ -58,10 +58,9 @@
 //! in MATLAB) picks one, and is required for a matrix. Every channel of one log must
 //! have the same number of samples; `NaN` and infinite samples are errors.
 //!
-//! **Not supported:** in MATLAB files, sparse arrays, complex arrays, and the contents
-//! of cells and objects (listed, not channels); in v7.3 files, also HDF5 filters other
-//! than deflate, shuffle and Fletcher-32 (MATLAB writes no others), and external or
-//! virtual storage.
+//! **Not supported:** sparse arrays, complex arrays, and the contents of cells and
+//! objects (`string`, `datetime`, classes), in level-5 and v7.3 files alike: they are
+//! listed by [`inspect`], not channels.
 //!
 //! # The map file
 //!
