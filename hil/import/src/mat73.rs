@@ -17,8 +17,9 @@
 //!   present), named `s.field`; a struct array (a group whose members are datasets of
 //!   object references, one per element) is followed through the references, its
 //!   elements named `s(k).field` (1-based, column-major), as for level 5;
-//! - char, cell, complex arrays and objects (`MATLAB_object_decode`, e.g. `string`) are
-//!   listed with their class and no values, so they are not channels.
+//! - char, cell, sparse (`MATLAB_sparse`), complex arrays and objects
+//!   (`MATLAB_object_decode`, e.g. `string`) are listed with their class and no values,
+//!   so they are not channels.
 //!
 //! hdf5-pure returns errors for the faults it finds; every call into it is also made
 //! under `catch_unwind`, so that a corrupt file it does not expect is still an
@@ -248,9 +249,13 @@ impl Walker {
             ));
         }
         let attrs = g.attrs().map_err(&ctx)?;
-        let class = class_attr(&attrs).unwrap_or_else(|| "struct".into());
+        let mut class = class_attr(&attrs).unwrap_or_else(|| "struct".into());
+        if attrs.contains_key("MATLAB_sparse") {
+            // A sparse matrix: a group of data, ir and jc.
+            class = "sparse".into();
+        }
         if class != "struct" || attrs.contains_key("MATLAB_object_decode") {
-            // An object of a user class: listed, not walked.
+            // A sparse matrix or an object of a user class: listed, not walked.
             out.push(Var {
                 name: name.to_string(),
                 shape: vec![1, 1],
