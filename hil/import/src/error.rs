@@ -112,14 +112,22 @@ pub enum ImportError {
         message: String,
     },
 
-    /// A MATLAB v7.3 file (HDF5 inside), which this crate does not read yet.
-    #[error("{}: a MATLAB v7.3 (HDF5) MAT-file, which is not yet supported; re-save it in MATLAB with save(..., '-v7')", file.display())]
-    MatV73 {
+    /// A MATLAB v7.3 MAT-file (HDF5 inside) whose HDF5 part cannot be read: truncated
+    /// or corrupt (the HDF5 reader's own message follows), or an array whose HDF5
+    /// element type does not fit its `MATLAB_class`.
+    #[error("{}: MATLAB v7.3 (HDF5) MAT-file: {what}: {message}", file.display())]
+    MatV73Corrupt {
         /// The log file.
         file: PathBuf,
+        /// The variable being read (``variable `s.pos` ``), or `HDF5 file` for a fault
+        /// outside any variable (the superblock, the root group).
+        what: String,
+        /// What is wrong.
+        message: String,
     },
 
-    /// A `.mat` file that is not a level-5 MAT-file, or is truncated or corrupt.
+    /// A `.mat` file that is neither a level-5 nor a v7.3 MAT-file, or a level-5 one
+    /// that is truncated or corrupt.
     #[error("{}: byte {offset}: {what}: {message}", file.display())]
     MatCorrupt {
         /// The log file.

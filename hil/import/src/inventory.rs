@@ -29,7 +29,7 @@ pub struct Entry {
 pub struct Inventory {
     /// The file.
     pub file: PathBuf,
-    /// `MATLAB level 5`, `CSV (comma-separated)`, `TSV (tab-separated)`…
+    /// `MATLAB level 5`, `MATLAB v7.3 (HDF5)`, `CSV (comma-separated)`, `TSV (tab-separated)`…
     pub format: String,
     /// Every variable or column, in file order.
     pub entries: Vec<Entry>,
@@ -45,7 +45,7 @@ fn looks_like_time(name: &str) -> bool {
 /// header sniffed.
 ///
 /// # Errors
-/// [`ImportError::Io`], [`ImportError::MatV73`], [`ImportError::MatCorrupt`],
+/// [`ImportError::Io`], [`ImportError::MatCorrupt`], [`ImportError::MatV73Corrupt`],
 /// [`ImportError::Csv`].
 pub fn inspect(path: &Path) -> Result<Inventory, ImportError> {
     let log = Log::read(path, &CsvOptions::default())?;

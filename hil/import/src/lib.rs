@@ -28,6 +28,21 @@
 //! arrays and objects are listed by [`inspect`] but cannot be channels. A file is read
 //! as a MAT-file when its name ends in `.mat` or it starts with `MATLAB`.
 //!
+//! **MATLAB v7.3 MAT-files** (`save(..., '-v7.3')`, needed for variables over 2 GB):
+//! an HDF5 file behind MATLAB's 512-byte header, told by that header's text
+//! (`MATLAB 7.3 MAT-file`) or by the HDF5 signature at byte 512 (or at byte 0, an HDF5
+//! file without the header), and read with a pure-Rust HDF5 reader (`hdf5-pure`; no C
+//! library). The same variables as level 5, under the same names: each top-level
+//! variable with the class of its `MATLAB_class` attribute and its MATLAB shape (HDF5
+//! stores the dimensions reversed, an N×1 vector as 1×N; they are turned back), chunked
+//! and gzip-compressed or not; structs nested to any depth as `s.field`; struct arrays
+//! (fields stored as object references) as `s(k).field`; empty arrays (`MATLAB_empty`)
+//! with their shape and no samples. Top-level variables are listed sorted by name (HDF5
+//! keeps no file order), a struct's fields in the order of its `MATLAB_fields`. Char
+//! arrays, cells, complex arrays and objects (`string`, `datetime`, classes) are listed
+//! but cannot be channels. A truncated or corrupt file is
+//! [`ImportError::MatV73Corrupt`], naming the file and the variable.
+//!
 //! **Text logs** (any other file): one sample per row; the delimiter is comma, tab or
 //! semicolon, sniffed from the first line (or set by `[csv] delimiter`); the first row is
 //! a header unless every field of it is a number (or as `[csv] header` says); without a
@@ -43,10 +58,9 @@
 //! in MATLAB) picks one, and is required for a matrix. Every channel of one log must
 //! have the same number of samples; `NaN` and infinite samples are errors.
 //!
-//! **Not supported yet:** MATLAB v7.3 MAT-files (HDF5 inside). They are recognised (the
-//! header text `MATLAB 7.3 MAT-file`, or the HDF5 signature at byte 512) and rejected
-//! with [`ImportError::MatV73`], which says to re-save with `save(..., '-v7')`. Reading
-//! them needs an HDF5 reader and is left for later.
+//! **Not supported:** sparse arrays, complex arrays, and the contents of cells and
+//! objects (`string`, `datetime`, classes), in level-5 and v7.3 files alike: they are
+//! listed by [`inspect`], not channels.
 //!
 //! # The map file
 //!
@@ -201,6 +215,7 @@ mod inventory;
 mod log;
 mod map;
 mod mat;
+mod mat73;
 
 pub use error::{ImportError, MapAt, SampleAt};
 pub use import::{Imported, MappedChannel, ZeroedChannel, import};

@@ -29,7 +29,7 @@ pub(crate) struct Var {
 pub(crate) struct Log {
     /// The file.
     pub path: PathBuf,
-    /// `MATLAB level 5`, `CSV (comma)`…
+    /// `MATLAB level 5`, `MATLAB v7.3 (HDF5)`, `CSV (comma)`…
     pub format: String,
     /// Variables in file order.
     pub vars: Vec<Var>,
@@ -54,7 +54,11 @@ impl Log {
             source: e,
         })?;
         if is_mat(path, &bytes) {
-            crate::mat::read(path, &bytes)
+            if crate::mat73::is_v73(&bytes) {
+                crate::mat73::read(path, bytes)
+            } else {
+                crate::mat::read(path, &bytes)
+            }
         } else {
             crate::csvlog::read(path, &bytes, csv)
         }
@@ -195,11 +199,16 @@ pub(crate) fn shape_text(shape: &[usize]) -> String {
 
 /// Decimal places of a number's text: `0.001` → 3, `1.5e-4` → 5, `12` → 0.
 pub(crate) fn decimals(text: &str) -> i32 {
-    let (mantissa, exp) = match text.find(['e', 'E']) {
-        Some(i) => (&text[..i], text[i + 1..].parse::<i32>().unwrap_or(0)),
-        None => (text, 0),
+    // One pass over the bytes (this runs for every field of a text log).
+    let b = text.as_bytes();
+    let (mantissa, exp) = match b.iter().position(|&c| c == b'e' || c == b'E') {
+        Some(i) => (&b[..i], text[i + 1..].parse::<i32>().unwrap_or(0)),
+        None => (b, 0),
     };
-    let frac = mantissa.split_once('.').map_or(0, |(_, f)| f.len());
+    let frac = mantissa
+        .iter()
+        .position(|&c| c == b'.')
+        .map_or(0, |p| mantissa.len() - p - 1);
     i32::try_from(frac)
         .unwrap_or(i32::MAX / 2)
         .saturating_sub(exp.clamp(-1000, 1000))
@@ -267,5 +276,27 @@ pub(crate) fn time_tolerance(decimals: Option<i32>, scale: f64) -> impl Fn(f64) 
     move |period: f64| {
         let rounding = decimals.map_or(0.0, |d| 0.5 * 10_f64.powi(-d.clamp(-300, 300)));
         (rounding * scale.abs()).min(0.25 * period) + 1e-6 * period
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::decimals;
+
+    #[test]
+    fn decimals_count_the_fraction_less_the_exponent() {
+        for (text, d) in [
+            ("0.001", 3),
+            ("1.5e-4", 5),
+            ("1.5E-4", 5),
+            ("12", 0),
+            ("-3.250000", 6),
+            ("2e3", -3),
+            ("1.25e+1", 1),
+            (".5", 1),
+            ("7.", 0),
+        ] {
+            assert_eq!(decimals(text), d, "{text}");
+        }
     }
 }

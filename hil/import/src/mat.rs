@@ -25,7 +25,6 @@ const MI_UINT32: u32 = 6;
 const MI_MATRIX: u32 = 14;
 const MI_COMPRESSED: u32 = 15;
 const HEADER: usize = 128;
-const HDF5_SIGNATURE: &[u8] = b"\x89HDF\r\n\x1a\n";
 /// The largest inflated element accepted (a guard against a corrupt length).
 const MAX_INFLATED: u64 = 1 << 34;
 /// Deepest struct nesting followed.
@@ -147,7 +146,8 @@ fn class_name(class: u32, logical: bool) -> &'static str {
     }
 }
 
-/// Reads a level-5 MAT-file's variables.
+/// Reads a level-5 MAT-file's variables (a v7.3 file, told by `mat73::is_v73`, is
+/// read by `mat73::read` instead).
 pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<Log, ImportError> {
     let corrupt = |offset: usize, what: &str, message: String| ImportError::MatCorrupt {
         file: path.to_path_buf(),
@@ -155,12 +155,6 @@ pub(crate) fn read(path: &Path, bytes: &[u8]) -> Result<Log, ImportError> {
         what: what.to_string(),
         message,
     };
-    let text = String::from_utf8_lossy(bytes.get(..116).unwrap_or(bytes));
-    if text.contains("MATLAB 7.3 MAT-file") || bytes.get(512..520) == Some(HDF5_SIGNATURE) {
-        return Err(ImportError::MatV73 {
-            file: path.to_path_buf(),
-        });
-    }
     if bytes.len() < HEADER {
         return Err(corrupt(
             0,

@@ -337,3 +337,86 @@ fn several_logs_number_their_trials_in_order_and_must_share_a_rate() {
     );
     assert!(e.to_string().contains("slow.csv"), "{e}");
 }
+
+/// A log of over 4 MiB is parsed in two halves on two threads: the same values, and
+/// faults in the second half name their own line of the file.
+#[test]
+fn a_large_log_parsed_in_two_halves_keeps_values_and_line_numbers() {
+    const ROWS: usize = 200_000;
+    let dir = tempfile::tempdir().unwrap();
+    let value = |i: usize| (i % 1000) as f64 * 0.001_25 - 0.5 + (i / 1000) as f64 * 0.25;
+    // Line of each row: two comment lines and the header come first; comments and a
+    // blank line sit after row 100 400 (around the middle byte) and CRLF ends every
+    // line.
+    let mut text = String::from("# big log\r\n# second comment\r\nt,x,idx\r\n");
+    let mut line_of = Vec::with_capacity(ROWS);
+    let mut line = 3;
+    let mut block = (0, 0);
+    for i in 0..ROWS {
+        line += 1;
+        line_of.push(line);
+        text.push_str(&format!("{:.6},{},{i}\r\n", i as f64 / 1000.0, value(i)));
+        if i == 100_400 {
+            // A comment, a blank line and 200 kB of two-byte characters, where the
+            // halves are cut: the cut must fall on a line end, not inside a character.
+            text.push_str("# a comment in the middle\r\n\r\n");
+            line += 2;
+            block.0 = text.len();
+            for _ in 0..50 {
+                text.push_str(&format!("# {}\r\n", "é".repeat(2000)));
+                line += 1;
+            }
+            block.1 = text.len();
+        }
+    }
+    assert!(text.len() > 4 << 20, "{} bytes", text.len());
+    let header = "# big log\r\n# second comment\r\nt,x,idx\r\n".len();
+    let mid = header + (text.len() - header) / 2;
+    assert!((block.0..block.1).contains(&mid), "{mid} outside {block:?}");
+    let csv = write(dir.path(), "big.csv", &text);
+    let map = write(
+        dir.path(),
+        "map.toml",
+        &format!(
+            "axes = [\"x\"]\n[time]\nvar = \"t\"\n[channels]\nx_m = {{ var = \"x\", scale = 1e-3 }}\n\
+             ref_x_m = {{ var = \"idx\" }}\n{DEVICE}\n[trials]\ncut = \"whole\"\n"
+        ),
+    );
+    let inv = inspect(&csv).unwrap();
+    assert_eq!(inv.entries[0].rate_hz, Some(1000.0));
+    assert_eq!(inv.entries[1].shape, vec![ROWS, 1]);
+    let out = dir.path().join("s");
+    import(std::slice::from_ref(&csv), &map, &out).unwrap();
+    let s = Session::read(&out).unwrap();
+    let t = &s.trials[0];
+    assert_eq!(t.len(), ROWS);
+    for i in 0..ROWS {
+        assert_eq!(t.x_m[i], value(i) * 1e-3, "row {i}");
+        assert_eq!(t.ref_x_m.as_ref().unwrap()[i], i as f64, "row {i}");
+    }
+
+    // A row of the second half with a field too many, and one that is not a number:
+    // each named by its own line.
+    for (row, bad, expect) in [
+        (
+            150_000,
+            "1.0,2.0,3,4",
+            "4 fields, the header (line 3) has 3",
+        ),
+        (190_000, "190.000000,oops,190000", "\"oops\""),
+        (1_000, "1.000000,oops,1000", "\"oops\""),
+    ] {
+        let mut lines: Vec<&str> = text.split("\r\n").collect();
+        let k = line_of[row] - 1;
+        lines[k] = bad;
+        let broken = write(dir.path(), "broken.csv", &lines.join("\r\n"));
+        let out = dir.path().join(format!("broken{row}"));
+        let e = import(std::slice::from_ref(&broken), &map, &out).unwrap_err();
+        let msg = e.to_string();
+        assert!(
+            msg.contains(&format!("broken.csv:{}:", line_of[row])),
+            "row {row}: {msg}"
+        );
+        assert!(msg.contains(expect), "row {row}: {msg}");
+    }
+}

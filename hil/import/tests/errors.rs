@@ -474,22 +474,37 @@ fn output_must_be_new_or_empty() {
 }
 
 #[test]
-fn v73_files_are_refused_with_advice() {
+fn a_v73_file_whose_hdf5_part_is_garbage_is_a_clear_error() {
     let dir = tempfile::tempdir().unwrap();
     let mut bytes = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Nov 30 10:00:00 2026 HDF5 schema 1.00 .".to_vec();
     bytes.resize(512, b' ');
     bytes.extend_from_slice(b"\x89HDF\r\n\x1a\n");
-    bytes.resize(2048, 0);
+    bytes.extend((0..1536_u32).map(|k| (k.wrapping_mul(2_654_435_761) >> 24) as u8));
     let f = dir.path().join("big.mat");
     std::fs::write(&f, &bytes).unwrap();
     let e = inspect(&f).unwrap_err();
-    assert!(matches!(e, ImportError::MatV73 { .. }), "{e:?}");
+    assert!(
+        matches!(&e, ImportError::MatV73Corrupt { what, .. } if what == "HDF5 file"),
+        "{e:?}"
+    );
     let msg = e.to_string();
-    assert!(msg.contains("big.mat") && msg.contains("'-v7'"), "{msg}");
-    // The HDF5 signature alone is enough.
+    assert!(msg.contains("big.mat") && msg.contains("v7.3"), "{msg}");
+    // The HDF5 signature alone (at byte 512) is enough to read it as v7.3.
     bytes[..10].copy_from_slice(b"MATLAB 5.0");
     std::fs::write(&f, &bytes).unwrap();
-    assert!(matches!(inspect(&f), Err(ImportError::MatV73 { .. })));
+    assert!(matches!(
+        inspect(&f),
+        Err(ImportError::MatV73Corrupt { .. })
+    ));
+    // MATLAB's header with nothing behind it.
+    std::fs::write(&f, &bytes[..200]).unwrap();
+    let mut short = bytes[..200].to_vec();
+    short[..10].copy_from_slice(b"MATLAB 7.3");
+    std::fs::write(&f, &short).unwrap();
+    assert!(matches!(
+        inspect(&f),
+        Err(ImportError::MatV73Corrupt { .. })
+    ));
 }
 
 #[test]

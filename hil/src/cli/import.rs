@@ -1,16 +1,16 @@
-//! `rigtwin import`: a lab's measured log (MATLAB level-5 `.mat`, CSV/TSV) and a map
-//! file in, a session out (`rigtwin-import`); `--inspect` lists what a log holds, so
-//! that a person can write the map.
+//! `rigtwin import`: a lab's measured log (MATLAB `.mat`, level 5 or v7.3; CSV/TSV)
+//! and a map file in, a session out (`rigtwin-import`); `--inspect` lists what a log
+//! holds, so that a person can write the map.
 
 use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
 
-/// Turn measured logs into a session: MATLAB level-5 `.mat` files (structs of arrays
-/// included; v7.3 files are refused with advice) and continuous CSV/TSV logs, through a
-/// TOML map file that says which variable or column is which channel, its scale into
-/// SI units, the log's clock, how to cut trials (whole log, marker channel, table of
+/// Turn measured logs into a session: MATLAB `.mat` files, level 5 or v7.3 (HDF5),
+/// structs of arrays included, and continuous CSV/TSV logs, through a TOML map file
+/// that says which variable or column is which channel, its scale into SI units, the
+/// log's clock, how to cut trials (whole log, marker channel, table of
 /// onsets, movement threshold) and what the device is. The map's reference, with a full
 /// example, is `cargo doc -p rigtwin-import --open` (the crate's front page) and the
 /// README's "Importing measured data". Every error names the file, the line or

@@ -1,5 +1,5 @@
-//! Helpers shared by the import tests: an independent `.mat` writer (Python's scipy),
-//! map files and logs in a temporary directory.
+//! Helpers shared by the import tests: independent `.mat` writers (Python's scipy for
+//! level 5, h5py for v7.3), map files and logs in a temporary directory.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -8,19 +8,36 @@ use std::process::Command;
 /// Runs `script` with python3, which must have scipy and numpy: the tests' `.mat` files
 /// come from an independent writer. Without them the test fails, never skips.
 pub fn python(script: &str) {
+    probe("scipy.io, numpy", "scipy numpy");
+    run(script);
+}
+
+/// Runs `script` with python3, which must have h5py and numpy: the tests' MATLAB v7.3
+/// files come from an independent HDF5 writer (the HDF5 C library under h5py). Without
+/// them the test fails, never skips.
+pub fn python_h5py(script: &str) {
+    probe("h5py, numpy", "h5py numpy");
+    run(script);
+}
+
+/// Fails (never skips) when python3 cannot import `modules`, saying what to install.
+fn probe(modules: &str, pip: &str) {
     let probe = Command::new("python3")
-        .args(["-c", "import scipy.io, numpy"])
+        .args(["-c", &format!("import {modules}")])
         .output();
     match probe {
         Ok(o) if o.status.success() => {}
         Ok(o) => panic!(
-            "python3 has no scipy/numpy ({}): run `python3 -m pip install scipy numpy` (CI does, in .ci/run)",
+            "python3 cannot import {modules} ({}): run `python3 -m pip install {pip}` (CI does, in .ci/run)",
             String::from_utf8_lossy(&o.stderr).trim()
         ),
-        Err(e) => panic!(
-            "python3 is not available ({e}): install it and `python3 -m pip install scipy numpy`"
-        ),
+        Err(e) => {
+            panic!("python3 is not available ({e}): install it and `python3 -m pip install {pip}`")
+        }
     }
+}
+
+fn run(script: &str) {
     let out = Command::new("python3")
         .args(["-c", script])
         .output()
