@@ -14,33 +14,10 @@ mod common;
 
 use std::path::Path;
 
+use common::known::{N, check_samples, map_text, pos_mm, single, trig};
 use common::{DEVICE, python, write};
 use rigtwin_import::{Map, import, inspect};
 use rigtwin_session::{Axes, Session};
-
-const N: usize = 3000;
-
-/// The known arrays, computed the same way here and in the Python script (exact
-/// binary arithmetic, so both sides hold the same doubles).
-fn pos_mm(i: usize) -> f64 {
-    (i % 97) as f64 * 0.25 - 10.0 + (i / 97) as f64 * 0.5
-}
-fn ref_mm(i: usize) -> f64 {
-    (i % 50) as f64 * 0.125
-}
-fn sig(i: usize, col: usize) -> f64 {
-    (i as f64) * 0.5 + (col as f64) * 1000.0
-}
-fn counts(i: usize) -> i16 {
-    ((i * 37) % 4001) as i16 - 2000
-}
-fn single(i: usize) -> f32 {
-    ((i as f64) * 0.001 + 0.1) as f32
-}
-fn trig(i: usize) -> bool {
-    // Rises at 100, 1100, 2100; each pulse lasts 50 samples.
-    i >= 100 && (i - 100) % 1000 < 50
-}
 
 fn write_mat(path: &Path, compress: bool) {
     let script = format!(
@@ -71,58 +48,13 @@ scipy.io.savemat(r"{path}", {{
     python(&script);
 }
 
-fn map_text(cut: &str) -> String {
-    format!(
-        r#"
-created = "2026-12-01T09:00:00Z"
-[time]
-var = "t"
-
-[channels]
-x_m = {{ var = "data.pos", scale = 1e-3, unit = "mm" }}
-ref_x_m = {{ var = "data.ref", scale = 1e-3, unit = "mm" }}
-y_m = {{ var = "log.signals.values", column = 2, scale = 1e-6 }}
-ref_y_m = {{ var = "log.signals.wide", column = 3, scale = 1e-6 }}
-fx_n = {{ var = "counts", scale = 0.01, unit = "count" }}
-fy_n = {{ var = "u", scale = 2.0, offset = 0.5, unit = "V" }}
-
-{DEVICE}
-
-[subject]
-id = "S07"
-
-[trials]
-{cut}
-kind = "reach"
-"#
-    )
-}
-
-fn check_samples(s: &Session, starts: &[usize]) {
-    for (k, (entry, trial)) in s.iter().enumerate() {
-        assert_eq!(entry.id as usize, k + 1);
-        let a = starts[k];
-        for (j, &x) in trial.x_m.iter().enumerate() {
-            let i = a + j;
-            assert_eq!(x, pos_mm(i) * 1e-3, "x_m trial {} row {j}", k + 1);
-            assert_eq!(trial.ref_x_m.as_ref().unwrap()[j], ref_mm(i) * 1e-3);
-            assert_eq!(trial.y_m[j], sig(i, 1) * 1e-6, "y_m row {j}");
-            assert_eq!(trial.ref_y_m.as_ref().unwrap()[j], sig(i, 2) * 1e-6);
-            assert_eq!(trial.fx_n[j], f64::from(counts(i)) * 0.01);
-            assert_eq!(trial.fy_n[j], f64::from(single(i)) * 2.0 + 0.5);
-            assert_eq!(trial.pert_fx_n[j], 0.0);
-            assert_eq!(trial.t_s[j], j as f64 / 1000.0);
-        }
-    }
-}
-
 #[test]
 fn structs_matrices_ints_and_singles_round_trip_compressed_and_not() {
     for compress in [true, false] {
         let dir = tempfile::tempdir().unwrap();
         let mat = dir.path().join("block1.mat");
         write_mat(&mat, compress);
-        let map = write(dir.path(), "map.toml", &map_text(r#"cut = "whole""#));
+        let map = write(dir.path(), "map.toml", &map_text(r#"cut = "whole""#, ""));
         // The pert channels are not mapped: zeros (no [perturbation]); forces are.
         let out = dir.path().join("session");
         let imported = import(std::slice::from_ref(&mat), &map, &out).unwrap();
@@ -135,7 +67,7 @@ fn structs_matrices_ints_and_singles_round_trip_compressed_and_not() {
         assert_eq!(s.manifest.axes, Axes::Both);
         assert_eq!(s.trials.len(), 1);
         assert_eq!(s.trials[0].len(), N);
-        check_samples(&s, &[0]);
+        check_samples(&s, &[0], |_, _, _| {});
         let text = imported.to_string();
         assert!(text.contains("1 trial at 1000 Hz"), "{text}");
         assert!(text.contains("x_m"), "{text}");
@@ -155,6 +87,7 @@ fn logical_marker_cuts_trials_from_a_mat_file() {
         &map_text(
             r#"cut = "marker"
 marker = { var = "trig", above = 0.5 }"#,
+            "",
         ),
     );
     let out = dir.path().join("s");
@@ -163,7 +96,7 @@ marker = { var = "trig", above = 0.5 }"#,
     assert_eq!(starts, [100, 1100, 2100]);
     assert_eq!(imported.samples, vec![1000, 1000, N - 2100]);
     let s = Session::read(&out).unwrap();
-    check_samples(&s, &starts);
+    check_samples(&s, &starts, |_, _, _| {});
 }
 
 #[test]

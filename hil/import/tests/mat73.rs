@@ -15,31 +15,10 @@ mod common;
 
 use std::path::Path;
 
+use common::known::{N, check_samples, map_text, pos_mm, single, trig};
 use common::{DEVICE, python_h5py, write};
 use rigtwin_import::{ImportError, import, inspect};
 use rigtwin_session::{Axes, Session};
-
-const N: usize = 3000;
-
-fn pos_mm(i: usize) -> f64 {
-    (i % 97) as f64 * 0.25 - 10.0 + (i / 97) as f64 * 0.5
-}
-fn ref_mm(i: usize) -> f64 {
-    (i % 50) as f64 * 0.125
-}
-fn sig(i: usize, col: usize) -> f64 {
-    (i as f64) * 0.5 + (col as f64) * 1000.0
-}
-fn counts(i: usize) -> i16 {
-    ((i * 37) % 4001) as i16 - 2000
-}
-fn single(i: usize) -> f32 {
-    ((i as f64) * 0.001 + 0.1) as f32
-}
-fn trig(i: usize) -> bool {
-    // Rises at 100, 1100, 2100; each pulse lasts 50 samples.
-    i >= 100 && (i - 100) % 1000 < 50
-}
 
 /// A writer of MATLAB-layout v7.3 files over h5py: `put` stores an array as MATLAB
 /// does (transposed, `MATLAB_class`), `struct` makes a struct group with
@@ -122,52 +101,12 @@ header(path)
     python_h5py(&script);
 }
 
-fn map_text(cut: &str) -> String {
-    format!(
-        r#"
-created = "2026-12-01T09:00:00Z"
-[time]
-var = "t"
+/// The struct array's channel, mapped on top of the level-5 files' channels.
+const CMD: &str = r#"cmd_fx_n = { var = "trials(2).pos", scale = 1e-3 }"#;
 
-[channels]
-x_m = {{ var = "data.pos", scale = 1e-3, unit = "mm" }}
-ref_x_m = {{ var = "data.ref", scale = 1e-3, unit = "mm" }}
-y_m = {{ var = "log.signals.values", column = 2, scale = 1e-6 }}
-ref_y_m = {{ var = "log.signals.wide", column = 3, scale = 1e-6 }}
-fx_n = {{ var = "counts", scale = 0.01, unit = "count" }}
-fy_n = {{ var = "u", scale = 2.0, offset = 0.5, unit = "V" }}
-cmd_fx_n = {{ var = "trials(2).pos", scale = 1e-3 }}
-
-{DEVICE}
-
-[subject]
-id = "S07"
-
-[trials]
-{cut}
-kind = "reach"
-"#
-    )
-}
-
-fn check_samples(s: &Session, starts: &[usize]) {
-    assert_eq!(s.trials.len(), starts.len());
-    for (k, (entry, trial)) in s.iter().enumerate() {
-        assert_eq!(entry.id as usize, k + 1);
-        let a = starts[k];
-        for (j, &x) in trial.x_m.iter().enumerate() {
-            let i = a + j;
-            assert_eq!(x, pos_mm(i) * 1e-3, "x_m trial {} row {j}", k + 1);
-            assert_eq!(trial.ref_x_m.as_ref().unwrap()[j], ref_mm(i) * 1e-3);
-            assert_eq!(trial.y_m[j], sig(i, 1) * 1e-6, "y_m row {j}");
-            assert_eq!(trial.ref_y_m.as_ref().unwrap()[j], sig(i, 2) * 1e-6);
-            assert_eq!(trial.fx_n[j], f64::from(counts(i)) * 0.01);
-            assert_eq!(trial.fy_n[j], f64::from(single(i)) * 2.0 + 0.5);
-            assert_eq!(trial.cmd_fx_n.as_ref().unwrap()[j], pos_mm(i) * 3.0 * 1e-3);
-            assert_eq!(trial.pert_fx_n[j], 0.0);
-            assert_eq!(trial.t_s[j], j as f64 / 1000.0);
-        }
-    }
+/// `trials(2).pos` holds three times the position (the writer's second element).
+fn cmd_is_pos_times_3(trial: &rigtwin_session::Trial, i: usize, j: usize) {
+    assert_eq!(trial.cmd_fx_n.as_ref().unwrap()[j], pos_mm(i) * 3.0 * 1e-3);
 }
 
 #[test]
@@ -180,7 +119,7 @@ fn v73_structs_matrices_ints_singles_and_struct_arrays_round_trip() {
         assert!(bytes.starts_with(b"MATLAB 7.3 MAT-file"));
         assert_eq!(&bytes[124..128], b"\x00\x02IM");
         assert_eq!(&bytes[512..520], b"\x89HDF\r\n\x1a\n");
-        let map = write(dir.path(), "map.toml", &map_text(r#"cut = "whole""#));
+        let map = write(dir.path(), "map.toml", &map_text(r#"cut = "whole""#, CMD));
         let out = dir.path().join("session");
         let imported = import(std::slice::from_ref(&mat), &map, &out).unwrap();
         assert_eq!(imported.rate_hz, 1000.0);
@@ -190,7 +129,7 @@ fn v73_structs_matrices_ints_singles_and_struct_arrays_round_trip() {
         assert_eq!(s.manifest.subject.id, "S07");
         assert_eq!(s.manifest.axes, Axes::Both);
         assert_eq!(s.trials[0].len(), N);
-        check_samples(&s, &[0]);
+        check_samples(&s, &[0], cmd_is_pos_times_3);
         let text = imported.to_string();
         assert!(text.contains("1 trial at 1000 Hz"), "{text}");
     }
@@ -207,6 +146,7 @@ fn v73_logical_marker_cuts_trials() {
         &map_text(
             r#"cut = "marker"
 marker = { var = "trig", above = 0.5 }"#,
+            CMD,
         ),
     );
     let out = dir.path().join("s");
@@ -214,7 +154,7 @@ marker = { var = "trig", above = 0.5 }"#,
     let starts: Vec<usize> = (1..N).filter(|&i| trig(i) && !trig(i - 1)).collect();
     assert_eq!(starts, [100, 1100, 2100]);
     assert_eq!(imported.samples, vec![1000, 1000, N - 2100]);
-    check_samples(&Session::read(&out).unwrap(), &starts);
+    check_samples(&Session::read(&out).unwrap(), &starts, cmd_is_pos_times_3);
 }
 
 #[test]
@@ -294,7 +234,7 @@ fn v73_missing_variable_names_the_file_and_the_variable() {
     let dir = tempfile::tempdir().unwrap();
     let mat = dir.path().join("rig7.mat");
     write_v73(&mat, true);
-    let map = map_text(r#"cut = "whole""#).replace("\"data.ref\"", "\"data.vel\"");
+    let map = map_text(r#"cut = "whole""#, CMD).replace("\"data.ref\"", "\"data.vel\"");
     let map = write(dir.path(), "map.toml", &map);
     let e = import(&[mat], &map, &dir.path().join("s")).unwrap_err();
     assert!(
