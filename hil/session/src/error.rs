@@ -302,6 +302,46 @@ pub enum SessionError {
         found_s: f64,
     },
 
+    /// A file the session names is not a regular file: a FIFO, a device or a socket
+    /// would block a reader or never end.
+    #[error("{}: is a {kind}, not a regular file", file.display())]
+    NotARegularFile {
+        /// The path.
+        file: PathBuf,
+        /// What it is (`FIFO`, `directory`, `device`, `socket`).
+        kind: &'static str,
+    },
+
+    /// A file is larger than a reader reads: the bound is stated so that no file (a
+    /// sparse image, a mistaken path) can make a reader allocate without limit.
+    #[error("{}: {bytes} bytes is more than the {limit} bytes {why}", file.display())]
+    TooLarge {
+        /// The file.
+        file: PathBuf,
+        /// Its size, bytes.
+        bytes: u64,
+        /// The bound, bytes.
+        limit: u64,
+        /// Where the bound comes from.
+        why: String,
+    },
+
+    /// A trial's `file` resolves (through a symbolic link) to a place outside the
+    /// session directory.
+    #[error("{}:{line}: field `{field}`: trial file {} resolves to {}, outside the session directory", file.display(), path.display(), resolved.display())]
+    OutsideSession {
+        /// The manifest.
+        file: PathBuf,
+        /// Line of the `file` key.
+        line: usize,
+        /// Always `trial.file`.
+        field: String,
+        /// The trial file as listed.
+        path: PathBuf,
+        /// Where it leads.
+        resolved: PathBuf,
+    },
+
     /// The writer was asked to do something that would produce a file that breaks the
     /// format (non-finite sample, columns of different lengths, a trial id used twice).
     #[error("{}: {message}", file.display())]
@@ -341,6 +381,9 @@ impl SessionError {
             | SessionError::NonFinite { file, .. }
             | SessionError::NonMonotonicTime { file, .. }
             | SessionError::NonUniformTime { file, .. }
+            | SessionError::NotARegularFile { file, .. }
+            | SessionError::TooLarge { file, .. }
+            | SessionError::OutsideSession { file, .. }
             | SessionError::InvalidWrite { file, .. } => file,
         }
     }
@@ -349,7 +392,10 @@ impl SessionError {
     #[must_use]
     pub fn line(&self) -> Option<usize> {
         match self {
-            SessionError::Io { .. } | SessionError::InvalidWrite { .. } => None,
+            SessionError::Io { .. }
+            | SessionError::InvalidWrite { .. }
+            | SessionError::NotARegularFile { .. }
+            | SessionError::TooLarge { .. } => None,
             SessionError::Toml { line, .. }
             | SessionError::MissingKey { line, .. }
             | SessionError::UnknownKey { line, .. }
@@ -359,6 +405,7 @@ impl SessionError {
             | SessionError::DuplicateTrialId { line, .. }
             | SessionError::DuplicateTrialFile { line, .. }
             | SessionError::TrialFileMissing { line, .. }
+            | SessionError::OutsideSession { line, .. }
             | SessionError::ShaMismatch { line, .. }
             | SessionError::PerturbationOutsideTrial { line, .. }
             | SessionError::Csv { line, .. }

@@ -16,6 +16,7 @@
 //! that reads back.
 
 mod error;
+pub mod files;
 mod manifest;
 pub mod replay;
 mod table;
@@ -25,14 +26,41 @@ use std::path::{Path, PathBuf};
 
 pub use error::SessionError;
 pub use manifest::{
-    Amplitude, Axes, Device, FORMAT, FORMAT_VERSION, Manifest, Percentiles, Perturbation,
-    PerturbationKind, Sha256, SimInfo, Source, Subject, Timing, TrialEntry, TrialKind,
+    Amplitude, Axes, Device, FORMAT, FORMAT_VERSION, MAX_RATE_HZ, MIN_RATE_HZ, Manifest,
+    Percentiles, Perturbation, PerturbationKind, Sha256, SimInfo, Source, Subject, Timing,
+    TrialEntry, TrialKind,
 };
 pub use table::{Column, OPTIONAL_COLUMNS, REQUIRED_COLUMNS, Trial, time_tolerance_s};
-pub use writer::{Channels, Recovered, Sample, SessionWriter, TrialMeta, recover};
+pub use writer::{
+    Channels, LOCK_FILE, Recovered, Repaired, SET_ASIDE_DIR, Sample, SessionWriter, TrialMeta,
+    leftovers, recover, repair,
+};
 
 /// The manifest's file name inside a session directory.
 pub const MANIFEST_FILE: &str = "session.toml";
+
+/// Where the trial files' size bound comes from, for its error.
+const TRIAL_BOUND: &str = "a trial table at the manifest's rate_hz may have (an hour of 512-byte rows, files::max_trial_bytes)";
+
+/// A trial file that a symbolic link leads out of the session directory is refused: a
+/// session is read as one folder, and its readers must not be pointed at other files.
+fn check_inside(
+    dir: &Path,
+    manifest_path: &Path,
+    at: &manifest::EntryLines,
+    path: &Path,
+) -> Result<(), SessionError> {
+    match files::escapes(dir, path) {
+        None => Ok(()),
+        Some(resolved) => Err(SessionError::OutsideSession {
+            file: manifest_path.to_path_buf(),
+            line: at.file,
+            field: "trial.file".into(),
+            path: path.to_path_buf(),
+            resolved,
+        }),
+    }
+}
 
 /// A whole session in memory: the manifest and every trial, in manifest order.
 #[derive(Debug, Clone, PartialEq)]
@@ -75,12 +103,21 @@ impl Session {
     pub fn open(dir: impl AsRef<Path>) -> Result<SessionReader, SessionError> {
         let dir = dir.as_ref().to_path_buf();
         let manifest_path = dir.join(MANIFEST_FILE);
-        let text = std::fs::read_to_string(&manifest_path)
-            .map_err(|e| SessionError::io(&manifest_path, e))?;
+        let bytes = files::read_bounded(
+            &manifest_path,
+            files::MAX_MANIFEST_BYTES,
+            "a manifest may have (files::MAX_MANIFEST_BYTES)",
+        )?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            SessionError::io(
+                &manifest_path,
+                std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
+            )
+        })?;
         let (manifest, lines) = manifest::parse(&text, &manifest_path)?;
         for (entry, at) in manifest.trials.iter().zip(&lines) {
             let path = entry.path_in(&dir);
-            if !path.is_file() {
+            if !path.exists() {
                 return Err(SessionError::TrialFileMissing {
                     file: manifest_path,
                     line: at.file,
@@ -88,6 +125,8 @@ impl Session {
                     missing: path,
                 });
             }
+            check_inside(&dir, &manifest_path, at, &path)?;
+            files::check_regular(&path, files::max_trial_bytes(manifest.rate_hz), TRIAL_BOUND)?;
         }
         Ok(SessionReader {
             dir,
@@ -160,18 +199,20 @@ impl SessionReader {
         at: &manifest::EntryLines,
     ) -> Result<Trial, SessionError> {
         let path = entry.path_in(&self.dir);
-        let bytes = match std::fs::read(&path) {
-            Ok(b) => b,
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-                return Err(SessionError::TrialFileMissing {
-                    file: self.manifest_path.clone(),
-                    line: at.file,
-                    field: "trial.file".into(),
-                    missing: path,
-                });
-            }
-            Err(e) => return Err(SessionError::io(path, e)),
-        };
+        if !path.exists() {
+            return Err(SessionError::TrialFileMissing {
+                file: self.manifest_path.clone(),
+                line: at.file,
+                field: "trial.file".into(),
+                missing: path,
+            });
+        }
+        check_inside(&self.dir, &self.manifest_path, at, &path)?;
+        let bytes = files::read_bounded(
+            &path,
+            files::max_trial_bytes(self.manifest.rate_hz),
+            TRIAL_BOUND,
+        )?;
         if let Some(expected) = entry.sha256 {
             let actual = Sha256::of(&bytes);
             if actual != expected {

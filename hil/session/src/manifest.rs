@@ -35,6 +35,11 @@ pub(crate) use write::write_trial_entry;
 pub const FORMAT: &str = "rig-session";
 /// The only `format_version` this module reads and writes.
 pub const FORMAT_VERSION: i64 = 1;
+/// The lowest `rate_hz` a reader accepts, Hz: below it a sample period's tolerance no
+/// longer checks a time column.
+pub const MIN_RATE_HZ: f64 = 1.0;
+/// The highest `rate_hz` a reader accepts, Hz (a haptic rig's loop runs at 1–10 kHz).
+pub const MAX_RATE_HZ: f64 = 1.0e6;
 
 /// Which of the rig frame's axes a session's rig has: the optional top-level
 /// `axes = ["x"]` (an extension of version 1; both when absent, and readers of the spec
@@ -78,7 +83,7 @@ impl Axes {
 pub struct Manifest {
     /// Measured (`rig`) or simulated (`sim`).
     pub source: Source,
-    /// Sampling rate of every trial table, Hz (> 0).
+    /// Sampling rate of every trial table, Hz ([`MIN_RATE_HZ`] to [`MAX_RATE_HZ`]).
     pub rate_hz: f64,
     /// `axes`: which axes the rig has (optional; both when absent). A one-axis rig (a
     /// linear servo stage) writes its other axis's columns as zeros.

@@ -257,6 +257,43 @@ impl Trial {
     }
 }
 
+/// The 1-based line of a byte offset, for offsets that only grow: each call counts the
+/// newlines since the previous one, so a whole file costs one pass.
+struct LineOf<'a> {
+    bytes: &'a [u8],
+    byte: usize,
+    line: usize,
+}
+
+impl<'a> LineOf<'a> {
+    fn new(bytes: &'a [u8]) -> Self {
+        LineOf {
+            bytes,
+            byte: 0,
+            line: 1,
+        }
+    }
+
+    /// The line of the record the csv reader placed at `byte` (at or after the previous
+    /// call's offset). After a CRLF line the reader's offset is the `\n` of the previous
+    /// line's end, so line-end bytes at the offset are skipped first: no record starts
+    /// with one.
+    fn at(&mut self, byte: usize) -> usize {
+        let mut end = byte.min(self.bytes.len());
+        while end < self.bytes.len() && matches!(self.bytes[end], b'\r' | b'\n') {
+            end += 1;
+        }
+        if end > self.byte {
+            self.line += self.bytes[self.byte..end]
+                .iter()
+                .filter(|&&b| b == b'\n')
+                .count();
+            self.byte = end;
+        }
+        self.line
+    }
+}
+
 /// A header name the writer can put in a CSV file without quoting.
 pub(crate) fn is_column_name(name: &str) -> bool {
     !name.is_empty()
@@ -275,14 +312,19 @@ pub(crate) fn parse_csv(bytes: &[u8], rate_hz: f64, file: &Path) -> Result<Trial
         .comment(Some(b'#'))
         .trim(csv::Trim::All)
         .from_reader(bytes);
+    // Lines are counted from the record's byte offset: the csv crate's own line count
+    // is one short after every CRLF-ended line (what Windows, MATLAB and Excel write).
+    let mut lines = LineOf::new(bytes);
     let csv_error = |e: csv::Error| SessionError::Csv {
         file: file.to_path_buf(),
-        line: e.position().map_or(0, |p| p.line() as usize),
+        line: e
+            .position()
+            .map_or(0, |p| LineOf::new(bytes).at(p.byte() as usize)),
         message: e.to_string(),
     };
     let mut record = csv::StringRecord::new();
     let header_found = reader.read_record(&mut record).map_err(csv_error)?;
-    let header_line = record.position().map_or(1, |p| p.line() as usize);
+    let header_line = record.position().map_or(1, |p| lines.at(p.byte() as usize));
     if !header_found {
         return Err(SessionError::MissingHeader {
             file: file.to_path_buf(),
@@ -324,7 +366,7 @@ pub(crate) fn parse_csv(bytes: &[u8], rate_hz: f64, file: &Path) -> Result<Trial
     let mut previous_t = f64::NEG_INFINITY;
     let mut rows = 0_usize;
     while reader.read_record(&mut record).map_err(csv_error)? {
-        let line = record.position().map_or(0, |p| p.line() as usize);
+        let line = record.position().map_or(0, |p| lines.at(p.byte() as usize));
         if record.len() != names.len() {
             return Err(SessionError::FieldCount {
                 file: file.to_path_buf(),

@@ -114,6 +114,49 @@ pub struct SessionWriter {
     dir: PathBuf,
     manifest: Manifest,
     active: Option<Active>,
+    /// Held while the writer lives, so that a second writer into the same directory is
+    /// refused instead of interleaving trials.
+    _lock: DirLock,
+}
+
+/// The name of the lock file a [`SessionWriter`] holds in its directory.
+pub const LOCK_FILE: &str = ".session.lock";
+
+/// An exclusive advisory lock on a session directory (`flock` on [`LOCK_FILE`]); the
+/// file is removed when the lock is dropped. The kernel releases the lock of a killed
+/// process, so a stale file never blocks the next writer.
+#[derive(Debug)]
+struct DirLock {
+    path: PathBuf,
+    _file: File,
+}
+
+impl DirLock {
+    fn take(dir: &Path) -> Result<DirLock, SessionError> {
+        let path = dir.join(LOCK_FILE);
+        let file = File::options()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|e| SessionError::io(&path, e))?;
+        match file.try_lock() {
+            Ok(()) => Ok(DirLock { path, _file: file }),
+            Err(std::fs::TryLockError::WouldBlock) => Err(invalid(
+                dir,
+                "another writer is recording into this directory (its lock is held)",
+            )),
+            Err(std::fs::TryLockError::Error(e)) => Err(SessionError::io(&path, e)),
+        }
+    }
+}
+
+impl Drop for DirLock {
+    fn drop(&mut self) {
+        // Best effort: a lock file left behind is harmless (the lock died with its file
+        // handle), and there is no one to tell in a drop.
+        let _ = fs::remove_file(&self.path);
+    }
 }
 
 impl std::fmt::Debug for Active {
@@ -213,8 +256,28 @@ impl SessionWriter {
                 "already holds a session (use SessionWriter::resume)",
             ));
         }
+        let trials = dir.join("trials");
+        fs::create_dir_all(&trials).map_err(|e| SessionError::io(&trials, e))?;
+        let lock = DirLock::take(&dir)?;
+        // Checked again under the lock: another writer may have started in between.
+        if path.exists() {
+            return Err(invalid(
+                &path,
+                "already holds a session (use SessionWriter::resume)",
+            ));
+        }
         if !manifest.trials.is_empty() {
             return Err(invalid(&path, "a new session starts with no trial"));
+        }
+        if let Some(seed) = manifest.sim.as_ref().and_then(|s| s.seed)
+            && i64::try_from(seed).is_err()
+        {
+            return Err(invalid(
+                &path,
+                format!(
+                    "sim.seed {seed} is past 2^63 - 1, the largest integer a TOML reader must accept"
+                ),
+            ));
         }
         if !(manifest.rate_hz.is_finite() && manifest.rate_hz > 0.0) {
             return Err(invalid(
@@ -222,12 +285,11 @@ impl SessionWriter {
                 format!("rate_hz must be finite and > 0, found {}", manifest.rate_hz),
             ));
         }
-        let trials = dir.join("trials");
-        fs::create_dir_all(&trials).map_err(|e| SessionError::io(&trials, e))?;
         let writer = SessionWriter {
             dir,
             manifest,
             active: None,
+            _lock: lock,
         };
         writer.write_manifest()?;
         Ok(writer)
@@ -240,6 +302,7 @@ impl SessionWriter {
     /// unfinished trial is left (run [`recover`] first).
     pub fn resume(dir: impl AsRef<Path>) -> Result<SessionWriter, SessionError> {
         let reader = super::Session::open(&dir)?;
+        let lock = DirLock::take(dir.as_ref())?;
         let dir = dir.as_ref().to_path_buf();
         if let Some(sidecar) = sidecars(&dir)?.into_iter().next() {
             return Err(invalid(
@@ -251,6 +314,7 @@ impl SessionWriter {
             dir,
             manifest: reader.into_manifest(),
             active: None,
+            _lock: lock,
         })
     }
 
@@ -577,18 +641,14 @@ pub struct Recovered {
 pub fn recover(dir: impl AsRef<Path>) -> Result<Vec<Recovered>, SessionError> {
     let dir = dir.as_ref();
     let mut manifest = super::Session::open(dir)?.into_manifest();
+    let _lock = DirLock::take(dir)?;
     remove_if_present(&dir.join(format!("{MANIFEST_FILE}.tmp")))?;
     let mut recovered = Vec::new();
     for sidecar in sidecars(dir)? {
         let text = fs::read_to_string(&sidecar).map_err(|e| SessionError::io(&sidecar, e))?;
         let (mut entry, _) = manifest::parse_trial_entry(&text, &sidecar)?;
         let final_path = entry.path_in(dir);
-        let mut partial_name = final_path
-            .file_name()
-            .map(|n| n.to_os_string())
-            .unwrap_or_default();
-        partial_name.push(".partial");
-        let partial = final_path.with_file_name(partial_name);
+        let partial = partial_of(&final_path);
         if manifest.trials.iter().any(|t| t.id == entry.id) {
             remove_if_present(&partial)?;
             remove_if_present(&sidecar)?;
@@ -633,4 +693,137 @@ pub fn recover(dir: impl AsRef<Path>) -> Result<Vec<Recovered>, SessionError> {
         remove_if_present(&sidecar)?;
     }
     Ok(recovered)
+}
+
+/// `trials/NNNN.csv.partial` for `trials/NNNN.csv`: where the writer records a trial.
+fn partial_of(final_path: &Path) -> PathBuf {
+    let mut name = final_path
+        .file_name()
+        .map(|n| n.to_os_string())
+        .unwrap_or_default();
+    name.push(".partial");
+    final_path.with_file_name(name)
+}
+
+/// What [`repair`] did to a killed session.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Repaired {
+    /// Trials that were complete on disk (renamed into place after their last row was
+    /// synced) but not yet in the manifest, now listed with their digest.
+    pub listed: Vec<u32>,
+    /// Files of the trial being recorded when the run was killed, moved unchanged into
+    /// [`SET_ASIDE_DIR`]: a cut trial is not a trial the protocol asked for, and its
+    /// rows are kept for a person to look at.
+    pub set_aside: Vec<PathBuf>,
+    /// Leftovers that hold nothing the manifest does not (a sidecar of a listed trial,
+    /// a manifest temp file), removed.
+    pub removed: Vec<PathBuf>,
+}
+
+/// Where [`repair`] puts an incomplete trial's files, inside the session directory.
+pub const SET_ASIDE_DIR: &str = "set-aside";
+
+/// The files a killed [`SessionWriter`] can leave beside a session: a manifest temp file,
+/// trial sidecars and partial trial tables, and anything already set aside. Readers ignore
+/// them; `rigtwin inspect` names them.
+///
+/// # Errors
+/// I/O errors listing the directories.
+pub fn leftovers(dir: impl AsRef<Path>) -> Result<Vec<PathBuf>, SessionError> {
+    let dir = dir.as_ref();
+    let mut out = Vec::new();
+    let tmp = dir.join(format!("{MANIFEST_FILE}.tmp"));
+    if tmp.exists() {
+        out.push(tmp);
+    }
+    for sub in ["trials", SET_ASIDE_DIR] {
+        let d = dir.join(sub);
+        let entries = match fs::read_dir(&d) {
+            Ok(e) => e,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e) => return Err(SessionError::io(&d, e)),
+        };
+        for e in entries {
+            let path = e.map_err(|e| SessionError::io(&d, e))?.path();
+            let name = path.to_string_lossy();
+            if sub == SET_ASIDE_DIR || name.ends_with(".partial") || name.ends_with(".partial.toml")
+            {
+                out.push(path);
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// Finishes the manifest of a killed session: every complete trial is listed, the trial
+/// that was being recorded is set aside (moved, never deleted), and leftovers that hold
+/// nothing new are removed. A repaired session's trials are byte for byte those of an
+/// uninterrupted run, because a trial file only takes its final name after its last row
+/// is synced. Unlike [`recover`], no trial is cut. Repairing twice changes nothing.
+///
+/// # Errors
+/// The manifest does not read (a run killed before its first manifest has nothing to
+/// repair); a sidecar does not parse; I/O errors.
+pub fn repair(dir: impl AsRef<Path>) -> Result<Repaired, SessionError> {
+    let dir = dir.as_ref();
+    let mut manifest = super::Session::open(dir)?.into_manifest();
+    let _lock = DirLock::take(dir)?;
+    let mut done = Repaired::default();
+    let tmp = dir.join(format!("{MANIFEST_FILE}.tmp"));
+    if tmp.exists() {
+        remove_if_present(&tmp)?;
+        done.removed.push(tmp);
+    }
+    for sidecar in sidecars(dir)? {
+        let text = fs::read_to_string(&sidecar).map_err(|e| SessionError::io(&sidecar, e))?;
+        let (mut entry, _) = manifest::parse_trial_entry(&text, &sidecar)?;
+        let final_path = entry.path_in(dir);
+        let partial = partial_of(&final_path);
+        if manifest.trials.iter().any(|t| t.id == entry.id) {
+            // Killed after the manifest listed it: the sidecar is a copy.
+            remove_if_present(&sidecar)?;
+            done.removed.push(sidecar);
+            continue;
+        }
+        if partial.exists() || !final_path.exists() {
+            for f in [&partial, &sidecar] {
+                if f.exists() {
+                    done.set_aside.push(set_aside(dir, f)?);
+                }
+            }
+            continue;
+        }
+        let bytes = fs::read(&final_path).map_err(|e| SessionError::io(&final_path, e))?;
+        // The file is complete; check it parses before listing it.
+        table::parse_csv(&bytes, manifest.rate_hz, &final_path)?;
+        entry.sha256 = Some(Sha256::of(&bytes));
+        done.listed.push(entry.id);
+        manifest.trials.push(entry);
+        manifest.trials.sort_by_key(|t| t.id);
+        write_atomic(&dir.join(MANIFEST_FILE), manifest.to_toml().as_bytes())?;
+        remove_if_present(&sidecar)?;
+        done.removed.push(sidecar);
+    }
+    Ok(done)
+}
+
+/// Moves `file` into the session's [`SET_ASIDE_DIR`] under its own name (with `.1`,
+/// `.2`, ... if that is taken) and returns where it went.
+fn set_aside(dir: &Path, file: &Path) -> Result<PathBuf, SessionError> {
+    let aside = dir.join(SET_ASIDE_DIR);
+    fs::create_dir_all(&aside).map_err(|e| SessionError::io(&aside, e))?;
+    let name = file
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut to = aside.join(&name);
+    let mut k = 0;
+    while to.exists() {
+        k += 1;
+        to = aside.join(format!("{name}.{k}"));
+    }
+    fs::rename(file, &to).map_err(|e| SessionError::io(file, e))?;
+    sync_dir(&aside)?;
+    Ok(to)
 }

@@ -222,3 +222,72 @@ fn kill_at_random_instants_always_leaves_a_readable_session() {
         check_prefix(&Session::read(&dir).unwrap());
     }
 }
+
+/// Runs the child to completion in `dir`: the uninterrupted run.
+fn uninterrupted(dir: &Path) {
+    let status = spawn(dir, None).wait().unwrap();
+    assert!(status.success());
+}
+
+/// Kills a writer paused at sample `n`; while it lives, a second writer and a repair are
+/// refused (the directory's lock), and after the kill `repair` lists every complete
+/// trial — byte for byte the uninterrupted run's files — and sets the cut one aside
+/// without deleting it.
+#[test]
+fn repair_after_a_kill_gives_the_uninterrupted_runs_trials_and_sets_the_cut_one_aside() {
+    let reference = tempfile::tempdir().unwrap();
+    uninterrupted(reference.path());
+    // Mid trial 2, at the last row of trial 2, and inside trial 4.
+    for n in [ROWS + 250, 2 * ROWS, 3 * ROWS + 1] {
+        let tmp = tempfile::tempdir().unwrap();
+        let mut child = spawn(tmp.path(), Some(n));
+        let start = Instant::now();
+        while !tmp.path().join("ready").exists() {
+            assert!(
+                start.elapsed() < Duration::from_secs(60),
+                "child never reached {n}"
+            );
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let dir = tmp.path().join("s");
+        let busy = SessionWriter::resume(&dir).unwrap_err().to_string();
+        assert!(busy.contains("another writer"), "{busy}");
+        let busy = rigtwin_session::repair(&dir).unwrap_err().to_string();
+        assert!(busy.contains("another writer"), "{busy}");
+        child.kill().unwrap();
+        child.wait().unwrap();
+
+        let left = rigtwin_session::leftovers(&dir).unwrap();
+        assert_eq!(left.len(), 2, "the partial table and its sidecar: {left:?}");
+        let done = rigtwin_session::repair(&dir).unwrap();
+        let complete = (n - 1) / ROWS;
+        assert_eq!(done.set_aside.len(), 2, "{done:?}");
+        let s = Session::read(&dir).unwrap();
+        assert_eq!(s.trials.len() as u64, complete, "killed at {n}");
+        for e in &s.manifest.trials {
+            let ours = std::fs::read(e.path_in(&dir)).unwrap();
+            let theirs = std::fs::read(e.path_in(&reference.path().join("s"))).unwrap();
+            assert!(
+                ours == theirs,
+                "trial {} differs from the uninterrupted run",
+                e.id
+            );
+        }
+        // The cut trial's rows are kept, set aside.
+        let cut = dir.join(format!(
+            "{}/{:04}.csv.partial",
+            rigtwin_session::SET_ASIDE_DIR,
+            complete + 1
+        ));
+        let rows = std::fs::read_to_string(&cut).unwrap().lines().count() as u64 - 1;
+        let pushed = n - complete * ROWS;
+        assert!(
+            rows <= pushed && rows + LOSS >= pushed,
+            "{rows} rows of {pushed}"
+        );
+        // Twice changes nothing.
+        assert_eq!(rigtwin_session::repair(&dir).unwrap(), Default::default());
+        assert_eq!(Session::read(&dir).unwrap(), s);
+        assert!(!dir.join(rigtwin_session::LOCK_FILE).exists());
+    }
+}

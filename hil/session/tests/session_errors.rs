@@ -481,6 +481,22 @@ fn comments_reordered_columns_crlf_and_unknown_columns_still_read() {
     }
 }
 
+/// CRLF files (what Windows, MATLAB and Excel write) are numbered like LF files: the
+/// physical line of the bad field, counted from 1, whatever ends the lines before it.
+/// (The csv crate's own count was one short after CRLF lines.)
+#[test]
+fn crlf_files_name_the_physical_line() {
+    for (line, column, value) in [(2, 1, "x"), (60, 2, "nan"), (3500, 0, "9")] {
+        let d = copy_without_sha();
+        set_field(&trial1(&d), line, column, value);
+        edit(&trial1(&d), |t| {
+            format!("# a comment\r\n{}", t.replace('\n', "\r\n"))
+        });
+        let e = read_err(&d);
+        assert_eq!(e.line(), Some(line + 1), "{e}");
+    }
+}
+
 /// `axes` is optional: a one-axis rig lists its axis, the manifest writes it back, and a
 /// list that is not one of the three is an error at its line.
 #[test]

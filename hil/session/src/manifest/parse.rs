@@ -22,7 +22,7 @@ struct RawManifest {
     #[serde(rename = "format_version")]
     _format_version: de::IgnoredAny,
     source: Spanned<String>,
-    rate_hz: Positive,
+    rate_hz: SampleRate,
     axes: Option<Spanned<Vec<String>>>,
     created: Spanned<toml::Value>,
     device: RawDevice,
@@ -140,24 +140,38 @@ impl<'de> Deserialize<'de> for SimInfo {
 pub(crate) struct Locator<'a> {
     text: &'a str,
     file: &'a Path,
+    /// Byte offset of the start of each line: line `n` (1-based) starts at
+    /// `starts[n - 1]`. Built once, so locating a key costs a binary search and a manifest
+    /// of N trials is read in time linear in N.
+    starts: Vec<usize>,
 }
 
 impl<'a> Locator<'a> {
     pub(crate) fn new(text: &'a str, file: &'a Path) -> Self {
-        Locator { text, file }
+        let starts = std::iter::once(0)
+            .chain(
+                text.bytes()
+                    .enumerate()
+                    .filter(|&(_, b)| b == b'\n')
+                    .map(|(i, _)| i + 1),
+            )
+            .collect();
+        Locator { text, file, starts }
     }
 
     /// 1-based line of byte offset `at`.
     pub(crate) fn line(&self, at: usize) -> usize {
         let at = at.min(self.text.len());
-        1 + self.text.as_bytes()[..at]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
+        // The number of line starts at or before `at`.
+        self.starts.partition_point(|&s| s <= at)
     }
 
     fn line_text(&self, line: usize) -> &'a str {
-        self.text.lines().nth(line.saturating_sub(1)).unwrap_or("")
+        let Some(&start) = line.checked_sub(1).and_then(|i| self.starts.get(i)) else {
+            return "";
+        };
+        let end = self.starts.get(line).map_or(self.text.len(), |&e| e);
+        self.text[start..end].trim_end_matches(['\n', '\r'])
     }
 
     /// The table header in force at `line` (`trial.perturbation`), empty at top level.

@@ -33,6 +33,25 @@ impl<'de> Deserialize<'de> for Positive {
     }
 }
 
+/// A recording rate a reader can check time against, Hz: from [`MIN_RATE_HZ`] to
+/// [`MAX_RATE_HZ`]. Below the range the time check's tolerance (a fraction of a sample
+/// period) grows without bound — at `5e-324` it would accept any time column — and above
+/// it no rig in this format's scope samples.
+pub(super) struct SampleRate(pub(super) f64);
+
+impl<'de> Deserialize<'de> for SampleRate {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let Finite(v) = Finite::deserialize(d)?;
+        if (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&v) {
+            Ok(SampleRate(v))
+        } else {
+            Err(de::Error::custom(format!(
+                "must be from {MIN_RATE_HZ} to {MAX_RATE_HZ} Hz, found {v}"
+            )))
+        }
+    }
+}
+
 /// A finite number ≥ 0.
 pub(super) struct NonNegative(pub(super) f64);
 
