@@ -54,7 +54,7 @@ impl Checker {
     pub fn fail(&mut self, key: impl Into<String>, problem: impl Into<String>) {
         self.errors.push(InvalidKey {
             key: key.into(),
-            problem: problem.into(),
+            problem: excerpt(&problem.into(), MAX_QUOTE_CHARS).into_owned(),
         });
     }
 
@@ -148,5 +148,37 @@ impl Checker {
                 errors: self.errors,
             })
         }
+    }
+}
+
+/// The most characters of a bad value an error quotes.
+pub const MAX_QUOTE_CHARS: usize = 200;
+
+/// `text` cut to its first `max_chars` characters, with how much was left out, so that
+/// an error quoting a bad field (a 10 MB string where a name should be) stays a line.
+#[must_use]
+pub fn excerpt(text: &str, max_chars: usize) -> std::borrow::Cow<'_, str> {
+    match text.char_indices().nth(max_chars) {
+        None => std::borrow::Cow::Borrowed(text),
+        Some((cut, _)) => std::borrow::Cow::Owned(format!(
+            "{}… ({} more bytes)",
+            &text[..cut],
+            text.len() - cut
+        )),
+    }
+}
+
+#[cfg(test)]
+mod excerpt_tests {
+    use super::excerpt;
+
+    #[test]
+    fn long_text_is_cut_on_a_character_boundary_and_says_how_much_is_left() {
+        assert_eq!(excerpt("short", 10), "short");
+        let long = "é".repeat(300);
+        let cut = excerpt(&long, 200);
+        assert!(cut.starts_with(&"é".repeat(200)), "{cut}");
+        // 100 characters of 2 bytes each are left out.
+        assert!(cut.ends_with("… (200 more bytes)"), "{cut}");
     }
 }

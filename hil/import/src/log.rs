@@ -46,12 +46,18 @@ fn is_mat(path: &Path, head: &[u8]) -> bool {
     ext.as_deref() == Some("mat") || head.starts_with(b"MATLAB")
 }
 
+/// The largest log `import` reads, bytes: 16 GiB.
+pub const MAX_LOG_BYTES: u64 = 16 << 30;
+
 impl Log {
     /// Reads a `.mat` (by extension or content) or a CSV/TSV file.
     pub(crate) fn read(path: &Path, csv: &CsvOptions) -> Result<Log, ImportError> {
-        let bytes = std::fs::read(path).map_err(|e| ImportError::Io {
-            file: path.to_path_buf(),
-            source: e,
+        // A log is read whole; 16 GiB is four hours of a 4 kHz 12-channel CSV.
+        let bytes = rigtwin_session::files::read_regular(path, MAX_LOG_BYTES).map_err(|e| {
+            ImportError::Io {
+                file: path.to_path_buf(),
+                source: e,
+            }
         })?;
         if is_mat(path, &bytes) {
             if crate::mat73::is_v73(&bytes) {

@@ -523,7 +523,11 @@ impl Map {
     /// [`ImportError::MapUnknownKey`] or [`ImportError::MapValue`], each naming the map
     /// file, the line and the key.
     pub fn read(path: &Path) -> Result<Map, ImportError> {
-        let text = std::fs::read_to_string(path).map_err(|e| ImportError::Io {
+        let text = rigtwin_session::files::read_regular_text(
+            path,
+            rigtwin_session::files::MAX_CONFIG_BYTES,
+        )
+        .map_err(|e| ImportError::Io {
             file: path.to_path_buf(),
             source: e,
         })?;

@@ -200,7 +200,11 @@ impl ExtendedModel {
             path: path.to_path_buf(),
             reason,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| err(e.to_string()))?;
+        let text = rigtwin_session::files::read_regular_text(
+            path,
+            rigtwin_session::files::MAX_CONFIG_BYTES,
+        )
+        .map_err(|e| err(e.to_string()))?;
         toml::from_str(&text).map_err(|e| err(e.to_string()))
     }
 }

@@ -28,12 +28,15 @@ pub enum ProtocolError {
         message: String,
     },
     /// The file parsed, but some values are out of range.
-    #[error("{path}: invalid protocol: {}", rigtwin_device::config::join_invalid_keys(.errors))]
+    #[error("{path}: invalid protocol: {}", located(.errors, .lines))]
     Invalid {
         /// The file.
         path: PathBuf,
         /// Every invalid key (never empty).
         errors: Vec<InvalidKey>,
+        /// The line of each key in the file (`None` for a key left at its default
+        /// outside any table the file has).
+        lines: Vec<Option<usize>>,
     },
 }
 
@@ -48,4 +51,17 @@ impl ProtocolError {
             ProtocolError::Read { .. } => false,
         }
     }
+}
+
+/// `line 17: reach.trials must be > 0, got 0; line 40: ...`.
+fn located(errors: &[InvalidKey], lines: &[Option<usize>]) -> String {
+    errors
+        .iter()
+        .zip(lines.iter().chain(std::iter::repeat(&None)))
+        .map(|(e, l)| match l {
+            Some(l) => format!("line {l}: {e}"),
+            None => e.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
 }

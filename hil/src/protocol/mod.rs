@@ -15,6 +15,7 @@
 //! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
 
 mod error;
+mod locate;
 pub mod nuisance;
 pub mod seed;
 pub mod subjects;
@@ -38,6 +39,17 @@ pub(crate) fn whole_ticks(s: f64) -> f64 {
     (s * hz).round() / hz
 }
 pub use subjects::{SubjectSpread, SubjectsConfig, VirtualSubject};
+
+/// The longest trial a protocol may ask for, s (ten minutes). A trial is simulated and
+/// held in memory whole: at this length that is 2.4 M ticks and, at 4 kHz recording, about
+/// 300 MB of samples. Longer is an error before anything is allocated.
+pub const MAX_TRIAL_S: f64 = 600.0;
+
+/// The most trials per subject a protocol may ask for (a human session has a few hundred).
+pub const MAX_TRIALS: u32 = 10_000;
+
+/// The most virtual subjects one rehearsal may draw.
+pub const MAX_SUBJECTS: u32 = 10_000;
 
 /// The shipped protocols, by name: (name, file text).
 pub const BUILTIN: [(&str, &str); 3] = [
@@ -423,15 +435,23 @@ impl Protocol {
     pub fn from_toml(text: &str, path: &Path) -> Result<Protocol, ProtocolError> {
         let protocol: Protocol = toml::from_str(text).map_err(|e| ProtocolError::Parse {
             path: path.to_path_buf(),
-            message: e.to_string().trim_end().to_owned(),
+            message: parse_message(text, &e),
         })?;
-        protocol
-            .validate()
-            .map_err(|errors| ProtocolError::Invalid {
+        let mut errors = toml::Value::try_from(&protocol)
+            .map(|kept| locate::cut_arrays(text, &kept))
+            .unwrap_or_default();
+        if let Err(e) = protocol.validate() {
+            errors.extend(e);
+        }
+        if errors.is_empty() {
+            Ok(protocol)
+        } else {
+            Err(ProtocolError::Invalid {
                 path: path.to_path_buf(),
+                lines: locate::lines_of(text, &errors),
                 errors,
-            })?;
-        Ok(protocol)
+            })
+        }
     }
 
     /// Reads and checks a protocol file. A path that does not exist but is the name of
@@ -446,7 +466,11 @@ impl Protocol {
         {
             return Protocol::from_toml(p, path);
         }
-        let text = std::fs::read_to_string(path).map_err(|source| ProtocolError::Read {
+        let text = rigtwin_session::files::read_regular_text(
+            path,
+            rigtwin_session::files::MAX_CONFIG_BYTES,
+        )
+        .map_err(|source| ProtocolError::Read {
             path: path.to_path_buf(),
             source,
         })?;
@@ -500,6 +524,35 @@ impl Protocol {
         self.controller
             .control_rate()
             .unwrap_or(rigtwin_device::Rate::CONTROL)
+    }
+
+    /// Trial length, s, by protocol kind, with the key of its largest part (the one to
+    /// change when the trial is too long).
+    #[must_use]
+    pub fn trial_s(&self) -> (f64, &'static str) {
+        match self.kind {
+            ProtocolKind::ReachPerturb => {
+                let r = self.reach();
+                let parts = [
+                    (r.still_before_s, "reach.still_before_s"),
+                    (r.movement_s, "reach.movement_s"),
+                    (r.still_after_s, "reach.still_after_s"),
+                ];
+                sum_and_largest(&parts)
+            }
+            ProtocolKind::HoldSinusoid | ProtocolKind::CalibrationRig => {
+                let m = &self.controller.imposed_motion;
+                let parts = [
+                    (2.0 * m.ramp_s, "controller.imposed_motion.ramp_s"),
+                    (
+                        f64::from(m.cycles) / m.frequency_hz,
+                        "controller.imposed_motion.cycles",
+                    ),
+                    (self.hold().after_s, "hold.after_s"),
+                ];
+                sum_and_largest(&parts)
+            }
+        }
     }
 
     /// Number of trials per subject.
@@ -593,6 +646,7 @@ impl Protocol {
             }
         }
         self.check_plant(&mut c);
+        self.check_sizes(&mut c);
         self.subjects.check(&mut c);
         if let Some(n) = &self.nuisance {
             n.check(&mut c);
@@ -614,6 +668,50 @@ impl Protocol {
             Ok(())
         } else {
             Err(c.into_errors())
+        }
+    }
+
+    /// Sizes: a trial of at most [`MAX_TRIAL_S`], at most [`MAX_TRIALS`] per subject and
+    /// [`MAX_SUBJECTS`] subjects, each refused with what it would cost, before anything
+    /// is allocated or simulated.
+    fn check_sizes(&self, c: &mut Checker) {
+        let (trial_s, key) = self.trial_s();
+        // NaN parts are named by their own checks; only a finite excess is a size error.
+        if trial_s.is_finite() && trial_s > MAX_TRIAL_S {
+            let rate = f64::from(self.recording.rate_hz.max(1));
+            c.fail(
+                key,
+                format!(
+                    "makes a trial of {trial_s} s ({:.3e} ticks, {:.3e} recorded rows), more than the {MAX_TRIAL_S} s a trial may last",
+                    trial_s * f64::from(rigtwin_device::Rate::CONTROL.hz()),
+                    trial_s * rate,
+                ),
+            );
+        }
+        let (count, key) = match self.kind {
+            ProtocolKind::ReachPerturb => (u64::from(self.reach().trials), "reach.trials"),
+            ProtocolKind::HoldSinusoid => (self.hold().conditions.len() as u64, "hold.conditions"),
+            ProtocolKind::CalibrationRig => (
+                u64::from(self.calibration().repetitions),
+                "calibration.repetitions",
+            ),
+        };
+        if count > u64::from(MAX_TRIALS) {
+            c.fail(
+                key,
+                format!(
+                    "asks for {count} trials per subject, more than the {MAX_TRIALS} a protocol may have"
+                ),
+            );
+        }
+        if self.subjects.count > MAX_SUBJECTS {
+            c.fail(
+                "subjects.count",
+                format!(
+                    "asks for {} subjects, more than the {MAX_SUBJECTS} a rehearsal may draw",
+                    self.subjects.count
+                ),
+            );
         }
     }
 
@@ -725,3 +823,32 @@ impl Protocol {
         }
     }
 }
+
+/// The sum of `parts` and the key of the largest.
+fn sum_and_largest(parts: &[(f64, &'static str)]) -> (f64, &'static str) {
+    let total = parts.iter().map(|(v, _)| v).sum();
+    let key = parts
+        .iter()
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or("", |(_, k)| k);
+    (total, key)
+}
+
+/// A TOML error as one line: `line L, column C: message`, the message cut to
+/// [`rigtwin_device::check::MAX_QUOTE_CHARS`] (toml's own text quotes the whole line, and
+/// serde quotes a bad string whole).
+fn parse_message(text: &str, e: &toml::de::Error) -> String {
+    let message = rigtwin_device::check::excerpt(e.message().trim_end(), MAX_QUOTE);
+    match e.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = 1 + before.matches('\n').count();
+            let column = 1 + before.rsplit('\n').next().map_or(0, |l| l.chars().count());
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message.into_owned(),
+    }
+}
+
+/// The most characters of a bad value a protocol error quotes.
+const MAX_QUOTE: usize = rigtwin_device::check::MAX_QUOTE_CHARS;

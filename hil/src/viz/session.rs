@@ -47,7 +47,9 @@ pub fn recording_id(session: &Session) -> Result<String, VizError> {
 /// [`recording_id`] of the session in `dir` whose subject is `subject`.
 pub(crate) fn session_recording_id(dir: &Path, subject: &str) -> Result<String, VizError> {
     let path = dir.join(MANIFEST_FILE);
-    let bytes = std::fs::read(&path).map_err(|source| VizError::Io { path, source })?;
+    let bytes =
+        rigtwin_session::files::read_regular(&path, rigtwin_session::files::MAX_MANIFEST_BYTES)
+            .map_err(|source| VizError::Io { path, source })?;
     let digest = Sha256::digest(&bytes);
     let hex: String = digest[..8].iter().map(|b| format!("{b:02x}")).collect();
     Ok(format!("{subject}-{hex}"))
