@@ -3,33 +3,27 @@
 
 mod cli;
 
+use std::io::Write as _;
 use std::process::ExitCode;
 
 use clap::Parser as _;
 
-/// A reader that goes away (`rigtwin diagnose ... | head`) makes `println!` fail with a
-/// broken pipe, which it reports as a panic. Nothing is wrong then: whatever the command
-/// records is already on disk, and there is nobody left to tell. Exit quietly, as a
-/// filter killed by SIGPIPE would, instead of printing a panic.
-fn exit_quietly_on_broken_pipe() {
-    let default = std::panic::take_hook();
-    std::panic::set_hook(Box::new(move |info| {
-        let message = info.payload_as_str().unwrap_or("");
-        if message.contains("failed printing to stdout") && message.contains("Broken pipe") {
-            std::process::exit(0);
-        }
-        default(info);
-    }));
-}
-
 fn main() -> ExitCode {
-    exit_quietly_on_broken_pipe();
     let args = cli::Cli::parse();
-    match cli::run(&args) {
+    match cli::run(&args).and_then(|()| Ok(cli::out::flush()?)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
+            // A reader that went away (`rigtwin diagnose ... | head`): whatever the command
+            // records is already on disk and there is nobody left to tell. Exit quietly,
+            // as a filter killed by SIGPIPE would.
+            if e.downcast_ref::<cli::out::OutputError>()
+                .is_some_and(cli::out::OutputError::is_broken_pipe)
+            {
+                return ExitCode::SUCCESS;
+            }
             // `{:#}` prints the context chain on one line: "reading session X: file:line: ...".
-            eprintln!("error: {e:#}");
+            // If standard error itself cannot be written, the exit status is all that is left.
+            let _ = writeln!(std::io::stderr().lock(), "error: {e:#}");
             ExitCode::FAILURE
         }
     }

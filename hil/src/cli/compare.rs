@@ -29,6 +29,10 @@ pub struct Args {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Run even if the run is estimated to take more than an hour.
+    #[arg(long)]
+    pub yes: bool,
     /// Trials replayed by each evaluation of the subject fit.
     #[arg(long, value_name = "N", default_value_t = 8)]
     pub fit_trials: usize,
@@ -190,6 +194,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
     }
     let model = args.model.as_deref().map(ExtendedModel::read).transpose()?;
+    super::preflight(
+        "compare",
+        &session,
+        super::COMPARE_S_PER_RECORDED_S,
+        args.yes,
+    )?;
     let mut options = CompareOptions::default();
     options.fit.max_trials = args.fit_trials;
     options.fit.max_evaluations = args.fit_evaluations;
@@ -212,15 +222,17 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         viewer
             .finish()
             .with_context(|| format!("finishing --rerun {target}"))?;
-        eprintln!(
+        errln!(
             "rerun: {} trials, {} measured and {} simulated samples sent to {target} (recording {id})",
-            sent.trials, sent.measured_samples, sent.simulated_samples
+            sent.trials,
+            sent.measured_samples,
+            sent.simulated_samples
         );
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&c)?);
+        outln!("{}", serde_json::to_string_pretty(&c)?);
         return Ok(());
     }
-    print!("{}", table(&c, model.as_ref().map(|m| m.cause.as_str())));
+    out!("{}", table(&c, model.as_ref().map(|m| m.cause.as_str())));
     Ok(())
 }

@@ -114,7 +114,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     writer.set_timing(timing)?;
     writer.finish()?;
     let run = result.with_context(|| format!("running {} against {peer}", protocol.name))?;
-    println!(
+    outln!(
         "trial  trip                                    first missed deadline  round trip  max |x - ref| (x, y)"
     );
     for t in &run.trials {
@@ -128,7 +128,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         let miss = t
             .first_miss_tick
             .map_or_else(|| "-".to_owned(), |k| format!("tick {k}"));
-        println!(
+        outln!(
             "{:>5}  {:<39} {:>21}  {:>10}  {:.3} / {:.3} mm",
             t.id,
             trip,
@@ -156,14 +156,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let path = out.join("controller.json");
     std::fs::write(&path, serde_json::to_string_pretty(&json)? + "\n")
         .with_context(|| format!("writing {}", path.display()))?;
-    print!("{}", timing_table("controller", &run.timing));
-    println!("\nlink (controller end): {}", run.link);
+    out!("{}", timing_table("controller", &run.timing));
+    outln!("\nlink (controller end): {}", run.link);
     if args.link.faults != rigtwin_wire::FaultSpec::default() {
-        println!(
+        outln!(
             "faults injected (controller -> plant): {:?}",
             rig.transport().faults()
         );
     }
-    println!("session: {}", out.display());
+    outln!("session: {}", out.display());
     Ok(())
 }

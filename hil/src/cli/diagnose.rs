@@ -31,6 +31,10 @@ pub struct Args {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Run even if the run is estimated to take more than an hour.
+    #[arg(long)]
+    pub yes: bool,
     /// Write the extended model (the cause's effect, world keys) to this TOML file.
     #[arg(long, value_name = "FILE")]
     pub write_model: Option<PathBuf>,
@@ -72,6 +76,12 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     }
     let session = Session::read(&args.session)
         .with_context(|| format!("reading session {}", args.session.display()))?;
+    super::preflight(
+        "diagnose",
+        &session,
+        super::DIAGNOSE_S_PER_RECORDED_S,
+        args.yes,
+    )?;
     let opts = DiagnoseOptions {
         folds: args.folds,
         alpha: args.alpha,
@@ -90,20 +100,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         viewer
             .finish()
             .with_context(|| format!("finishing --rerun {target}"))?;
-        eprintln!(
+        errln!(
             "rerun: session and {} held-out trials ({} rows of the command, {} predicted) sent to {target} (recording {id})",
-            sent.trials, sent.measured_samples, sent.simulated_samples
+            sent.trials,
+            sent.measured_samples,
+            sent.simulated_samples
         );
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(d)?);
+        outln!("{}", serde_json::to_string_pretty(d)?);
     } else {
-        print!("{}", table(d));
+        out!("{}", table(d));
     }
     if let Some(path) = &args.write_model {
         ExtendedModel::from_diagnosis(d).write(path)?;
         if !args.json {
-            println!("model written to {}", path.display());
+            outln!("model written to {}", path.display());
         }
     }
     if !args.no_report {
@@ -113,7 +125,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             .unwrap_or_else(|| args.session.join("diagnosis"));
         let files = write_report(&analysis, &dir)?;
         if let (false, Some(md)) = (args.json, files.first()) {
-            println!("report written to {}", md.display());
+            outln!("report written to {}", md.display());
         }
     }
     Ok(())

@@ -65,7 +65,7 @@ fn stream(args: &Args, session: &Session, config: &EstimateConfig) -> anyhow::Re
         config,
         args.m_hat_kg,
     )?;
-    super::view::report_streamed(&streamed, target, args.json);
+    super::view::report_streamed(&streamed, target, args.json)?;
     Ok(())
 }
 
@@ -90,23 +90,23 @@ fn run_piovesan(args: &Args, session: &Session) -> anyhow::Result<()> {
             "method": "piovesan-windowed-regression",
             "trials": rows,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        outln!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
     }
-    println!(
+    outln!(
         "session    {} ({}, subject {}, {:.0} Hz)",
         args.session.display(),
         session.manifest.source.as_str(),
         session.manifest.subject.id,
         session.manifest.rate_hz
     );
-    println!("method     Piovesan windowed regression (mean over 10-cycle windows)");
-    println!(
+    outln!("method     Piovesan windowed regression (mean over 10-cycle windows)");
+    outln!(
         "trial  pushes  windows      K11      K12      K21      K22 [N/m]    B11    B22 [N s/m]    r²"
     );
     for t in &trials {
         match t {
-            Ok(t) => println!(
+            Ok(t) => outln!(
                 "{:5}  {:6}  {:7}  {:7.1}  {:7.1}  {:7.1}  {:7.1}      {:6.2} {:6.2}         {:.3}",
                 t.id,
                 t.perturbations,
@@ -119,7 +119,7 @@ fn run_piovesan(args: &Args, session: &Session) -> anyhow::Result<()> {
                 t.b_ns_per_m[1][1],
                 t.r2
             ),
-            Err(e) => println!("{e}"),
+            Err(e) => outln!("{e}"),
         }
     }
     Ok(())
@@ -190,37 +190,41 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             "high_pass_hz": config.high_pass_hz,
             "result": est,
         });
-        println!("{}", serde_json::to_string_pretty(&out)?);
+        outln!("{}", serde_json::to_string_pretty(&out)?);
         #[cfg(feature = "rerun")]
         stream(args, &session, &config)?;
         return Ok(());
     }
     let m = &session.manifest;
-    println!(
+    outln!(
         "session    {} ({}, subject {}, {:.0} Hz)",
         args.session.display(),
         m.source.as_str(),
         m.subject.id,
         m.rate_hz
     );
-    println!(
+    outln!(
         "method     Börner involuntary impedance: {} force-pulse trials, T_est {:.0} ms, high-pass {} Hz",
         est.trials,
         config.t_est_s * 1e3,
         config.high_pass_hz
     );
     let mb = est.m_bsp_kg;
-    println!(
+    outln!(
         "M_BSP      [[{:.3}, {:.3}], [{:.3}, {:.3}]] kg (a priori, arm endpoint inertia)",
-        mb[0][0], mb[0][1], mb[1][0], mb[1][1]
+        mb[0][0],
+        mb[0][1],
+        mb[1][0],
+        mb[1][1]
     );
     let d = mat(&est.d_ns_per_m, &est.d_std_err_ns_per_m);
     let k = mat(&est.k_n_per_m, &est.k_std_err_n_per_m);
-    println!("D [N s/m]  {}\n           {}", d[0], d[1]);
-    println!("K [N/m]    {}\n           {}", k[0], k[1]);
-    println!(
+    outln!("D [N s/m]  {}\n           {}", d[0], d[1]);
+    outln!("K [N/m]    {}\n           {}", k[0], k[1]);
+    outln!(
         "fit        condition number {:.1}, relative RMS residual {:.3}  (± = jackknife s.e. over trials)",
-        est.condition_number, est.nrmse
+        est.condition_number,
+        est.nrmse
     );
     #[cfg(feature = "rerun")]
     stream(args, &session, &config)?;

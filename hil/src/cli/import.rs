@@ -2,7 +2,6 @@
 //! and a map file in, a session out (`rigtwin-import`); `--inspect` lists what a log
 //! holds, so that a person can write the map.
 
-use std::io::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
@@ -51,7 +50,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         for f in &args.files {
             let inv = rigtwin_import::inspect(f)
                 .with_context(|| format!("inspecting {}", f.display()))?;
-            say(&format!("{inv}"))?;
+            out!("{inv}");
         }
         return Ok(());
     }
@@ -60,18 +59,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     };
     let imported = rigtwin_import::import(&args.files, map, out)
         .with_context(|| format!("importing into {}", out.display()))?;
-    say(&format!(
+    out!(
         "{imported}\nnext: rigtwin inspect {0}\n      rigtwin diagnose {0}\n",
         out.display()
-    ))?;
+    );
     Ok(())
-}
-
-/// Writes `text` to standard output; a failed write (a full disk behind a redirect, a
-/// closed pipe) is an error, not a panic.
-fn say(text: &str) -> anyhow::Result<()> {
-    let mut out = std::io::stdout().lock();
-    out.write_all(text.as_bytes())
-        .and_then(|()| out.flush())
-        .context("writing to standard output")
 }

@@ -16,7 +16,14 @@ use serde::Serialize;
 Examples:
   rigtwin inspect ../shared/recordings/example-none
   rigtwin inspect ../shared/recordings/example-friction --json | jq '.trials[0]'
-  rigtwin inspect ../shared/recordings/example-friction --rerun save=f.rrd  # also to the viewer")]
+  rigtwin inspect ../shared/recordings/example-friction --rerun save=f.rrd  # also to the viewer
+  rigtwin inspect out/reach-perturb-1/S01 --repair  # after a killed rehearsal
+
+A run killed while recording leaves files beside the session (session.toml.tmp,
+trials/NNNN.csv.partial, trials/NNNN.partial.toml). Readers ignore them and inspect lists
+them. --repair lists every complete trial in the manifest, moves the trial that was being
+recorded into set-aside/ unchanged (never deletes it) and removes copies that hold nothing
+new.")]
 pub struct Args {
     /// Session directory (holds session.toml and trials/).
     pub session: PathBuf,
@@ -24,6 +31,11 @@ pub struct Args {
     /// Print the summary as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+
+    /// Finish the manifest of a killed session first: list complete trials, set the
+    /// incomplete one aside (moved to set-aside/, never deleted).
+    #[arg(long)]
+    pub repair: bool,
 
     #[cfg(feature = "rerun")]
     #[command(flatten)]
@@ -74,6 +86,62 @@ struct Summary {
     /// Each column with the number of trials that have it.
     channels: Vec<(String, usize)>,
     trials: Vec<TrialSummary>,
+    /// Files an interrupted run left beside the session (readers ignore them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    leftovers: Vec<Leftover>,
+}
+
+/// A file an interrupted run left: what it is and how much is in it.
+#[derive(Debug, Serialize)]
+struct Leftover {
+    file: PathBuf,
+    what: &'static str,
+    bytes: u64,
+    /// Complete rows of a partial trial table (lines ending in a newline, less the header).
+    complete_rows: Option<usize>,
+}
+
+/// The leftovers of `dir`, each described.
+fn leftovers(dir: &std::path::Path) -> anyhow::Result<Vec<Leftover>> {
+    let files = rigtwin::session::leftovers(dir)
+        .with_context(|| format!("listing leftovers in {}", dir.display()))?;
+    let mut out = Vec::with_capacity(files.len());
+    for file in files {
+        let name = file.to_string_lossy().into_owned();
+        let bytes = std::fs::symlink_metadata(&file).map_or(0, |m| m.len());
+        let in_set_aside = file
+            .parent()
+            .and_then(|p| p.file_name())
+            .is_some_and(|n| n == rigtwin::session::SET_ASIDE_DIR);
+        let (what, complete_rows) = if name.contains(".csv.partial") {
+            // Bounded: a partial table is at most what a trial may be.
+            let rows = rigtwin::session::files::read_regular(
+                &file,
+                rigtwin::session::files::MAX_TRIAL_BYTES,
+            )
+            .ok()
+            .map(|b| b.iter().filter(|&&c| c == b'\n').count().saturating_sub(1));
+            let what = if in_set_aside {
+                "incomplete trial table, set aside"
+            } else {
+                "incomplete trial table (the run was killed while recording it)"
+            };
+            (what, rows)
+        } else if name.ends_with(".partial.toml") {
+            ("manifest entry of an incomplete trial", None)
+        } else if name.ends_with(".tmp") {
+            ("manifest being replaced when the run stopped", None)
+        } else {
+            ("set aside by --repair", None)
+        };
+        out.push(Leftover {
+            file,
+            what,
+            bytes,
+            complete_rows,
+        });
+    }
+    Ok(out)
 }
 
 fn summarise_trial(entry: &TrialEntry, trial: &Trial, rate_hz: f64) -> TrialSummary {
@@ -138,6 +206,7 @@ fn summarise(args: &Args) -> anyhow::Result<Summary> {
         body_mass_kg: m.subject.body_mass_kg,
         channels,
         trials,
+        leftovers: leftovers(&args.session)?,
     })
 }
 
@@ -271,6 +340,24 @@ fn render(s: &Summary) -> String {
         let cells: Vec<&str> = r.iter().map(String::as_str).collect();
         let _ = writeln!(out, "{}", line(&cells));
     }
+    if !s.leftovers.is_empty() {
+        let _ = writeln!(
+            out,
+            "\nleft by an interrupted run (readers ignore these; `rigtwin inspect --repair` lists complete trials and sets the rest aside):"
+        );
+        for l in &s.leftovers {
+            let rows = l
+                .complete_rows
+                .map_or_else(String::new, |r| format!(", {r} complete rows"));
+            let _ = writeln!(
+                out,
+                "  {}  {}, {} bytes{rows}",
+                l.file.display(),
+                l.what,
+                l.bytes
+            );
+        }
+    }
     out
 }
 
@@ -279,13 +366,32 @@ fn render(s: &Summary) -> String {
 /// # Errors
 /// The session does not read (the message names file, line and field).
 pub fn run(args: &Args) -> anyhow::Result<()> {
+    if args.repair {
+        let done = rigtwin::session::repair(&args.session)
+            .with_context(|| format!("repairing session {}", args.session.display()))?;
+        let ids: Vec<String> = done.listed.iter().map(u32::to_string).collect();
+        errln!(
+            "repaired: {} trial(s) listed{}, {} file(s) set aside, {} copy(ies) removed",
+            done.listed.len(),
+            if ids.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", ids.join(", "))
+            },
+            done.set_aside.len(),
+            done.removed.len()
+        );
+        for f in &done.set_aside {
+            errln!("  set aside: {}", f.display());
+        }
+    }
     let summary = summarise(args)?;
     if args.json {
         let text =
             serde_json::to_string_pretty(&summary).context("formatting the summary as JSON")?;
-        println!("{text}");
+        outln!("{text}");
     } else {
-        print!("{}", render(&summary));
+        out!("{}", render(&summary));
     }
     #[cfg(feature = "rerun")]
     if let Some(target) = &args.rerun.rerun {
@@ -298,7 +404,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             &rigtwin::protocol::EstimateConfig::default(),
             None,
         )?;
-        super::view::report_streamed(&streamed, target, args.json);
+        super::view::report_streamed(&streamed, target, args.json)?;
     }
     Ok(())
 }

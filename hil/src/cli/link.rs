@@ -20,7 +20,7 @@ pub struct SessionArgs {
     pub protocol: PathBuf,
 
     /// Session seed (default: the protocol's `seed`); the same on both ends.
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = clap::value_parser!(u64).range(..=i64::MAX.cast_unsigned()))]
     pub seed: Option<u64>,
 
     /// Output session folder; must not exist or be empty. Default: a fresh
@@ -95,12 +95,12 @@ impl LinkArgs {
         if self.lock_memory
             && let Err(note) = rigtwin::cosim::rt::lock_memory()
         {
-            eprintln!("{note}");
+            errln!("{note}");
         }
         if let Some(p) = self.rt_priority
             && let Err(note) = rigtwin::cosim::rt::set_fifo_priority(p)
         {
-            eprintln!("{note}");
+            errln!("{note}");
         }
         Ok(WallClock::new(
             protocol.control_rate(),

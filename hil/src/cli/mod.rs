@@ -6,6 +6,8 @@
 
 use clap::{Parser, Subcommand};
 
+#[macro_use]
+pub mod out;
 pub mod compare;
 pub mod controller;
 pub mod diagnose;
@@ -149,4 +151,53 @@ pub fn not_applicable(
     };
     let mut out = std::io::stdout().lock();
     writeln!(out, "{text}").context("writing to standard output")
+}
+
+/// Wall time per second of recording, s: `diagnose` (measured 4.9 s for the 112 s of
+/// `example-none` and 44 s for a ten-minute servo log, beside another build) and `compare`
+/// (13.6 s for `example-none`), rounded up so the estimate errs long.
+pub const DIAGNOSE_S_PER_RECORDED_S: f64 = 0.1;
+/// See [`DIAGNOSE_S_PER_RECORDED_S`].
+pub const COMPARE_S_PER_RECORDED_S: f64 = 0.15;
+
+/// Past this estimated wall time, `diagnose` and `compare` ask for `--yes`, s (an hour).
+pub const CONFIRM_WALL_S: f64 = 3600.0;
+
+/// Says on stderr what `what` will cost on `session` (trials, recorded time, samples and
+/// an estimate of wall time at `s_per_recorded_s`), and refuses past [`CONFIRM_WALL_S`]
+/// unless `yes`.
+///
+/// # Errors
+/// The run is past the limit and not confirmed; stderr cannot be written.
+pub fn preflight(
+    what: &str,
+    session: &rigtwin::session::Session,
+    s_per_recorded_s: f64,
+    yes: bool,
+) -> anyhow::Result<()> {
+    let recorded_s: f64 = session
+        .trials
+        .iter()
+        .map(rigtwin::session::Trial::end_s)
+        .sum();
+    let samples: usize = session
+        .trials
+        .iter()
+        .map(rigtwin::session::Trial::len)
+        .sum();
+    let wall_s = recorded_s * s_per_recorded_s;
+    errln!(
+        "{what}: {} trials, {} recorded ({samples} samples); about {}",
+        session.trials.len(),
+        rigtwin::rehearse::cost::duration(recorded_s),
+        rigtwin::rehearse::cost::duration(wall_s)
+    );
+    if wall_s > CONFIRM_WALL_S && !yes {
+        anyhow::bail!(
+            "not started: {what} would take about {}, more than the {} a run may take unconfirmed; add --yes to run it",
+            rigtwin::rehearse::cost::duration(wall_s),
+            rigtwin::rehearse::cost::duration(CONFIRM_WALL_S)
+        );
+    }
+    Ok(())
 }

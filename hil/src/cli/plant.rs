@@ -1,5 +1,6 @@
 //! `rigtwin plant serve`: the simulated rig and subject as a plant across the wire.
 
+use super::out;
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
@@ -125,13 +126,21 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
         )
     })?;
     // The address first, on its own line, so a script that asked for port 0 can read it.
-    eprintln!("listening on {bound}");
-    eprintln!(
+    errln!("listening on {bound}");
+    errln!(
         "serving {} trials of {} (seed {seed}); waiting for a controller",
         session.plans.len(),
         protocol.name
     );
-    let mut on_trial = |id: u32| eprintln!("trial {id}");
+    // A trial's line that cannot be written must not stop the loop mid-trial: the first
+    // failure is kept and returned once the session is closed.
+    let mut lost_line = None;
+    let mut on_trial = |id: u32| {
+        use std::io::Write as _;
+        if let Err(e) = out::checked("error", writeln!(std::io::stderr().lock(), "trial {id}")) {
+            lost_line.get_or_insert(e);
+        }
+    };
     let result = serve::serve(
         &session,
         &mut end,
@@ -147,28 +156,31 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
     writer.set_timing(timing)?;
     writer.finish()?;
     let report = result.with_context(|| format!("serving {} on {bound}", protocol.name))?;
+    if let Some(e) = lost_line {
+        return Err(e.into());
+    }
     let why = match report.end {
         serve::ServeEnd::AllTrials => "every trial recorded",
         serve::ServeEnd::Idle => "no command for the idle time",
     };
-    println!(
+    outln!(
         "plant: {} trials recorded ({why}); {} ticks, {} with the command watchdog zeroing the force",
         report.recorded.len(),
         report.ticks,
         report.watchdog_ticks
     );
     for (id, tick) in &report.first_stall {
-        println!(
+        outln!(
             "trial {id}: first stall ({} or more ticks without a fresh command) at tick {tick} ({:.3} s)",
             serve::STALL_TICKS,
             *tick as f64 / TICK_HZ as f64
         );
     }
     if !report.cut_short.is_empty() {
-        println!("cut short by the controller: trials {:?}", report.cut_short);
+        outln!("cut short by the controller: trials {:?}", report.cut_short);
     }
     if report.unknown_trial_commands > 0 {
-        println!(
+        outln!(
             "commands naming a trial the schedule does not have: {}",
             report.unknown_trial_commands
         );
@@ -177,7 +189,7 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
         let mut l = report.estop_latency_ticks.clone();
         l.sort_unstable();
         let q = |p: f64| l[((l.len() - 1) as f64 * p).round() as usize];
-        println!(
+        outln!(
             "e-stop to zero force at the plant, over {} presses: p50 {} / p99 {} / max {} ticks ({:.2} / {:.2} / {:.2} ms)",
             l.len(),
             q(0.5),
@@ -188,14 +200,14 @@ pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
             q(1.0) as f64 * 1e3 / TICK_HZ as f64
         );
     }
-    print!("{}", timing_table("plant", &timing));
-    println!("\nlink (plant end): {}", report.link);
+    out!("{}", timing_table("plant", &timing));
+    outln!("\nlink (plant end): {}", report.link);
     if args.link.faults != rigtwin_wire::FaultSpec::default() {
-        println!(
+        outln!(
             "faults injected (plant -> controller): {:?}",
             end.transport().faults()
         );
     }
-    println!("session: {}", out.display());
+    outln!("session: {}", out.display());
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! `rigtwin rehearse`: run a protocol against virtual subjects, record their sessions,
 //! and print and write the rehearsal report.
 
+use clap::builder::TypedValueParser as _;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
@@ -23,11 +24,14 @@ Examples:
   rigtwin rehearse hil/protocols/reach-perturb.toml --rerun save=r.rrd   # then: rerun r.rrd
   rigtwin rehearse reach-perturb --model model.toml  # with `rigtwin diagnose --write-model`'s effects
   rigtwin rehearse reach-perturb --realtime --max-trials 4 --rt-priority 80 --lock-memory
+  rigtwin rehearse my-protocol.toml --subjects 200 --dry-run  # what it would cost, then stop
 
 Shipped protocols (hil/protocols/, also built in by name): reach-perturb (000_*),
 hold-sinusoid (001_*), calibration-rig (001_* Appendix B).
 Output: <out>/S01/ (session.toml, trials/*.csv), ..., <out>/report.md, <out>/report.json.
-The same protocol and seed give byte-identical sessions, whatever --jobs is.
+Before it starts, a run says on stderr what it will cost (trials, simulated time, disk,
+memory, an estimate of wall time) and refuses past a day simulated or 10 GB written
+unless --yes. The same protocol and seed give byte-identical sessions, whatever --jobs is.
 --realtime paces every tick to the wall clock at the control rate (4 kHz) on one thread,
 skips missed deadlines instead of bursting (the plant moves on under the held command;
 `safety.max_consecutive_misses` trips the controller past that many in a row), and
@@ -37,12 +41,12 @@ pub struct Args {
     /// Protocol file (TOML), or the name of a shipped protocol.
     pub protocol: PathBuf,
 
-    /// Number of virtual subjects (default: the protocol's `subjects.count`).
-    #[arg(long, value_name = "N")]
+    /// Number of virtual subjects, 1 to 10000 (default: the protocol's `subjects.count`).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(rigtwin::protocol::MAX_SUBJECTS)))]
     pub subjects: Option<u32>,
 
     /// Session seed (default: the protocol's `seed`).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", value_parser = clap::value_parser!(u64).range(..=i64::MAX.cast_unsigned()))]
     pub seed: Option<u64>,
 
     /// Output folder; must not exist or be empty. Default: a fresh
@@ -50,8 +54,8 @@ pub struct Args {
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
 
-    /// Worker threads (trials are simulated in parallel, written in order).
-    #[arg(long, value_name = "N", default_value_t = default_jobs())]
+    /// Worker threads, 1 to 1024 (trials are simulated in parallel, written in order).
+    #[arg(long, value_name = "N", default_value_t = default_jobs(), value_parser = clap::value_parser!(u16).range(1..=1024).map(usize::from))]
     pub jobs: usize,
 
     /// Run only the first N trials of each subject's schedule (quick checks).
@@ -61,6 +65,15 @@ pub struct Args {
     /// Print the report as JSON instead of the table.
     #[arg(long)]
     pub json: bool,
+
+    /// Run even if the run is past the limits said before it starts (a day simulated,
+    /// 10 GB written).
+    #[arg(long)]
+    pub yes: bool,
+
+    /// Check the protocol and say what the run would cost, then stop (nothing written).
+    #[arg(long)]
+    pub dry_run: bool,
 
     /// Pace every tick to the wall clock at the control rate (real time) instead of lock
     /// step; one trial at a time.
@@ -131,10 +144,31 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         jobs: args.jobs,
         max_trials: args.max_trials,
     };
-    let per_subject = args.max_trials.map_or(protocol.trials_per_subject(), |m| {
-        m.min(protocol.trials_per_subject())
-    });
-    let total = per_subject * options.subjects as usize;
+    let cost = rehearse::cost::Cost::of(
+        &protocol,
+        options.subjects,
+        args.max_trials,
+        options.jobs,
+        args.realtime,
+    );
+    if args.dry_run {
+        outln!(
+            "{}: valid; {cost}{}",
+            protocol.name,
+            cost.needs_confirmation()
+                .map_or_else(String::new, |why| format!("; would need --yes: {why}"))
+        );
+        return Ok(());
+    }
+    errln!("rehearsing {}: {cost}", protocol.name);
+    if let Some(why) = cost.needs_confirmation()
+        && !args.yes
+    {
+        anyhow::bail!(
+            "not started: {why}; add --yes to run it, or fewer --subjects or --max-trials"
+        );
+    }
+    let total = usize::try_from(cost.trials)?;
     let bar = super::trial_bar(
         total as u64,
         "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials  {msg}",
@@ -166,7 +200,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         if args.lock_memory
             && let Err(note) = rigtwin::cosim::rt::lock_memory()
         {
-            eprintln!("{note}");
+            errln!("{note}");
         }
         rehearse::Pacing::RealTime(rehearse::RealTime {
             spin: std::time::Duration::from_micros(args.spin_us),
@@ -179,7 +213,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         rehearse::rehearse_paced(&protocol, &options, pacing, &progress, &cancel, observer)
             .with_context(|| format!("rehearsing {} into {}", protocol.name, out_dir.display()))?;
     for note in &rehearsal.realtime_notes {
-        eprintln!("{note}");
+        errln!("{note}");
     }
     bar.finish_and_clear();
     let rep = report::build(&rehearsal);
@@ -192,10 +226,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         }
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&rep)?);
+        outln!("{}", serde_json::to_string_pretty(&rep)?);
     } else {
-        print!("{}", report::summary_text(&rep));
-        println!(
+        out!("{}", report::summary_text(&rep));
+        outln!(
             "\nsessions: {}/S01 ... ; per-trial table: {}",
             out_dir.display(),
             out_dir.join("report.md").display()
@@ -248,9 +282,9 @@ fn finish_viewer(
     );
     // Keep stdout JSON-only under --json.
     if args.json {
-        eprintln!("{line}");
+        errln!("{line}");
     } else {
-        println!("{line}");
+        outln!("{line}");
     }
     match target {
         Target::Save(path) => {
@@ -260,9 +294,9 @@ fn finish_viewer(
                 path.display()
             );
             if args.json {
-                eprintln!("{msg}");
+                errln!("{msg}");
             } else {
-                println!("{msg}");
+                outln!("{msg}");
             }
         }
         Target::Spawn | Target::Connect(_) => {}

@@ -73,7 +73,14 @@ pub fn stream_session(
 /// One line saying where the viewer data went.
 /// Says what went to the viewer: on stdout, or on stderr under `--json` (stdout stays
 /// JSON-only).
-pub fn report_streamed(streamed: &Streamed, target: &Target, json: bool) {
+///
+/// # Errors
+/// A failed write to the stream, named.
+pub fn report_streamed(
+    streamed: &Streamed,
+    target: &Target,
+    json: bool,
+) -> Result<(), super::out::OutputError> {
     let line = format!(
         "viewer: {} samples, recording {}\n{}",
         streamed.logged.samples,
@@ -81,10 +88,11 @@ pub fn report_streamed(streamed: &Streamed, target: &Target, json: bool) {
         target_line(target)
     );
     if json {
-        eprintln!("{line}");
+        errln!("{line}");
     } else {
-        println!("{line}");
+        outln!("{line}");
     }
+    Ok(())
 }
 
 /// What `--rerun` will have produced, in one line.
@@ -121,7 +129,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     )?;
 
     let manifest = &session.manifest;
-    println!(
+    outln!(
         "session    {} ({}, {} trials, {} perturbed, {:.0} Hz)",
         manifest.subject.id,
         manifest.source.as_str(),
@@ -129,7 +137,7 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         logged.perturbed,
         manifest.rate_hz
     );
-    println!("samples    {}", logged.samples);
+    outln!("samples    {}", logged.samples);
     let arm = if !logged.arm {
         "not drawn (no segment lengths in the manifest)".to_owned()
     } else if logged.out_of_reach > 0 {
@@ -140,14 +148,14 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     } else {
         "drawn".to_owned()
     };
-    println!("arm        {arm}");
+    outln!("arm        {arm}");
     let ellipses = match (estimates.borner, estimates.windows) {
         (0, 0) => "none (nothing to estimate; see the event log)".to_owned(),
         (0, w) => format!("{w} windowed-regression windows (001_*)"),
         (_, _) => "Börner session estimate (000_*)".to_owned(),
     };
-    println!("ellipses   {ellipses}");
-    println!("recording  {recording_id}");
-    println!("{}", target_line(&target));
+    outln!("ellipses   {ellipses}");
+    outln!("recording  {recording_id}");
+    outln!("{}", target_line(&target));
     Ok(())
 }

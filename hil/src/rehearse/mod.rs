@@ -26,6 +26,7 @@
 pub use crate::cosim::record;
 /// Seed derivation lives with the protocol, which draws its subjects from it.
 pub use crate::protocol::seed;
+pub mod cost;
 pub mod trial;
 
 use std::collections::BTreeMap;
@@ -82,6 +83,9 @@ pub enum RehearseError {
     /// The run was cancelled.
     #[error("cancelled")]
     Cancelled,
+    /// More subjects than a rehearsal may draw.
+    #[error("{0} subjects is more than the {max} a rehearsal may draw", max = crate::protocol::MAX_SUBJECTS)]
+    TooManySubjects(u32),
     /// A co-simulation could not be built or a step failed: a lifecycle transition or a
     /// perturbation refused, the arm or the plant refusing its configuration, or the
     /// plant diverging.
@@ -671,6 +675,9 @@ pub fn rehearse_paced(
     observer: &mut dyn RehearsalObserver,
 ) -> Result<Rehearsal, RehearseError> {
     let started = Instant::now();
+    if options.subjects > crate::protocol::MAX_SUBJECTS {
+        return Err(RehearseError::TooManySubjects(options.subjects));
+    }
     prepare_out(&options.out_dir)?;
     let realtime = match pacing {
         Pacing::LockStep => None,

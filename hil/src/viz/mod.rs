@@ -127,6 +127,14 @@ pub enum VizError {
     /// Flushing a live stream failed.
     #[error("flushing the live stream: {0}")]
     Flush(String),
+    /// No viewer accepted a connection at the address within 3 s (`CONNECT_TIMEOUT`).
+    #[error("no rerun viewer answers at {url} within {} s ({reason}); start one with `rerun`, or use --rerun spawn or save=FILE.rrd", viewer::CONNECT_TIMEOUT.as_secs())]
+    NoViewer {
+        /// The viewer's URL.
+        url: String,
+        /// What the connection attempt said.
+        reason: String,
+    },
     /// The protocol could not be serialised to derive a rehearsal's recording id.
     #[error("describing the protocol for the recording id: {0}")]
     ProtocolId(serde_json::Error),

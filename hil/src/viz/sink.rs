@@ -248,11 +248,16 @@ impl Sink {
     /// Ends the stream: writes the footer and flushes. Returns the bytes of a memory sink.
     pub(crate) fn finish(self) -> Result<Option<Vec<u8>>, VizError> {
         match self {
-            Self::Live(rec) => {
-                rec.flush_with_timeout(LIVE_FLUSH_TIMEOUT)
-                    .map_err(|err| VizError::Flush(err.to_string()))?;
-                Ok(None)
-            }
+            Self::Live(rec) => match rec.flush_with_timeout(LIVE_FLUSH_TIMEOUT) {
+                Ok(()) => Ok(None),
+                Err(err) => {
+                    // Dropping the stream joins its sender thread, which stays blocked
+                    // on a viewer that stopped reading: the error would never be told.
+                    // The process ends with this error, so the stream is left to it.
+                    std::mem::forget(rec);
+                    Err(VizError::Flush(err.to_string()))
+                }
+            },
             Self::Encoded(mut b) => b.join(),
         }
     }

@@ -118,6 +118,38 @@ const MUSCLE_RGB: [[u8; 3]; paths::MUSCLES] = [
     [130, 210, 140],
 ];
 
+/// How long a viewer at a `connect` address has to accept a connection. The rerun SDK
+/// connects lazily and, with nobody listening, its sender blocks for good once its buffer
+/// fills; asking first turns that into an error after this long.
+pub const CONNECT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(3);
+
+/// Checks that something accepts TCP connections at the proxy URL's host and port.
+fn check_viewer_answers(url: &str) -> Result<(), VizError> {
+    use std::net::ToSocketAddrs as _;
+    let no = |reason: String| VizError::NoViewer {
+        url: url.to_owned(),
+        reason,
+    };
+    let host_port = url
+        .split_once("://")
+        .map_or(url, |(_, rest)| rest)
+        .split('/')
+        .next()
+        .unwrap_or("");
+    let addrs: Vec<_> = host_port
+        .to_socket_addrs()
+        .map_err(|e| no(format!("cannot resolve {host_port}: {e}")))?
+        .collect();
+    let mut last = format!("{host_port} resolves to no address");
+    for addr in addrs {
+        match std::net::TcpStream::connect_timeout(&addr, CONNECT_TIMEOUT) {
+            Ok(_) => return Ok(()),
+            Err(e) => last = format!("{addr}: {e}"),
+        }
+    }
+    Err(no(last))
+}
+
 fn positive(what: &'static str, value: f64) -> Result<f64, VizError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
@@ -136,6 +168,7 @@ impl Viewer {
             Target::Save(path) => Sink::file(path.clone())?,
             Target::Spawn => Sink::Live(stream_builder(&store_id).spawn()?),
             Target::Connect(url) => {
+                check_viewer_answers(url)?;
                 Sink::Live(stream_builder(&store_id).connect_grpc_opts(url.clone())?)
             }
         };
