@@ -273,10 +273,26 @@ impl Default for PositionPerturbationConfig {
 }
 
 /// The safety layer. It is always on: these limits hold in every mode.
+///
+/// Three watchdogs look for a part of the loop that has stopped working while
+/// reporting nothing wrong; each is on by default, counts in ticks of the control clock
+/// (4 kHz: one tick is 250 µs) and is switched off by setting its count to 0:
+///
+/// | key | trips when | default |
+/// |---|---|---|
+/// | `stale_force_ticks` | the raw force reading is bit-identical this many readings in a row | 40 (10 ms) |
+/// | `encoder_stall_ticks`, `encoder_stall_force_n` | an axis was commanded at least the force for this many readings and its encoder did not change by one count | 80 (20 ms), 50 N |
+/// | `deadline_window_ticks`, `max_deadline_overruns` | more active ticks than allowed arrived late (after skipped deadlines) within the window | 64 (16 ms), 4 |
+///
+/// A simulated sensor without noise repeats its readings legitimately (the simulator
+/// at rest, or `force_noise_rms_n = 0`): a protocol or a test that drives the controller
+/// with one states `stale_force_ticks = 0`. A scripted rig whose carts never move is a
+/// dead encoder to the stall watchdog: [`crate::testing::scripted`] says so for tests.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SafetyConfig {
-    /// Motor force is clamped to ±this per axis, N. > 0.
+    /// Motor force is clamped to ±this per axis, N. > 0. A non-finite command is never
+    /// clamped: it trips a fault and zero is written.
     pub force_limit_n: [f64; 2],
     /// Filtered encoder velocity beyond ±this on any axis trips a fault, m/s. > 0.
     pub velocity_limit_m_per_s: f64,
@@ -291,10 +307,56 @@ pub struct SafetyConfig {
     /// This many consecutive non-finite force readings trip a fault (the last finite
     /// reading is held meanwhile). > 0.
     pub nonfinite_force_ticks: u32,
-    /// When set, this many consecutive bit-identical raw force readings trip a fault:
-    /// a live strain-gauge ADC always moves its last bits, a frozen bus does not.
-    /// Unset by default because a noiseless simulator can repeat readings legitimately.
-    pub stale_force_ticks: Option<u32>,
+    /// This many consecutive bit-identical raw force readings (the first and its
+    /// repeats) trip a fault; 0 switches the watchdog off; 1 is refused (every reading
+    /// is a run of one). A live strain-gauge ADC always moves its last bits: with noise
+    /// of one LSB RMS two successive readings agree with probability ≈ 0.28, so 40 in a
+    /// row happen by chance once in ~10²¹ readings, while a frozen bus or amplifier
+    /// repeats its last word for ever. Default 40 = 10 ms at 4 kHz, which bounds what a
+    /// frozen reading does before the trip: 30 N frozen while the hand has let go drives
+    /// the default 5 kg admittance 6 cm/s and 0.3 mm. A noiseless simulated sensor
+    /// repeats readings legitimately and must set 0.
+    pub stale_force_ticks: u32,
+    /// The force an axis must be commanded (at least, either sign) for the encoder-stall
+    /// watchdog to count, N. > 0 and at most the smaller `force_limit_n`. Default 50 N:
+    /// on the heaviest axis of the shipped plant (x: both carts and the handle,
+    /// 12.35 kg) that is 4.0 m/s², ½ · 4.0 · (20 ms)² = 0.8 mm = 800 counts of a 1 µm
+    /// encoder in 20 ms from rest (y, 4.35 kg: 2.3 mm); and a quarter of the default
+    /// force limit, well above what holding a handle still needs on a gravity-free
+    /// rig (the hold protocol's 10 N).
+    pub encoder_stall_force_n: f64,
+    /// This many consecutive readings with the axis commanded at least
+    /// `encoder_stall_force_n` (the command written at the reading before) and its
+    /// encoder count not changed at all trip an encoder-stall fault on that axis;
+    /// 0 switches the watchdog off. A cut encoder cable freezes the count: the position
+    /// loop sees a constant error, pushes harder and harder, and the velocity and
+    /// position watchdogs, which read the same dead encoder, never fire. Default 80 =
+    /// 20 ms: 200 N (the default limit) on the 4.35 kg y cart reaches 0.9 m/s and 9 mm in
+    /// that time; a free cart under 50 N stays within one count of a turning point for
+    /// ~1.4 ms (1 µm at 4 m/s²). The contract: under that force the count must move
+    /// within 20 ms. A hand holding the handle against a stiff virtual spring moves it
+    /// through the small wobble of its force (in `tests/safety_watchdogs.rs`, 0.2 N at
+    /// 10 Hz on a 55 N hold against 10 kN/m is enough); a hold steadier than that, an
+    /// end stop, a clamp or a dead encoder are a stall. A set-up that holds the handle
+    /// still under large forces on purpose sets 0.
+    pub encoder_stall_ticks: u32,
+    /// Length of the loop-deadline watchdog's sliding window, ticks; 0 switches it off;
+    /// at most 64 (the window is one 64-bit word). Default 64 = 16 ms at 4 kHz.
+    pub deadline_window_ticks: u32,
+    /// An active tick that arrives after one or more skipped ticks is a deadline
+    /// overrun; more than this many within the last `deadline_window_ticks` ticks trip
+    /// a fault. Below `ceil(deadline_window_ticks / 2)`, the most a window can hold (a
+    /// late tick follows at least one skipped one). Where `max_consecutive_misses`
+    /// bounds how long one stall may be, this bounds how often the loop may be late: a
+    /// loop that keeps its period is late rarely, in single stalls (0.07–0.8 % of the
+    /// deadlines in the README's real-time runs on a shared VM, ~0.05–0.5 per 64 ticks).
+    /// Five late ticks in 16 ms is a loop that no longer keeps its period. The worst
+    /// such loop the clock-skip allowance lets through runs every other tick: on odd
+    /// ticks only it never reaches a motor tick (`tick % (control_rate_hz /
+    /// motor_rate_hz) == 0`), so the motor holds one command while the law moves on;
+    /// with the default 4 it trips at its fifth late tick, 11 ticks (2.75 ms) after the
+    /// last motor update. Default 4.
+    pub max_deadline_overruns: u32,
     /// An encoder step larger than this between consecutive ticks trips a fault, m
     /// (default 1 mm per 250 µs = 4 m/s, far above any hand speed). > 0.
     pub encoder_jump_m: f64,
@@ -306,6 +368,9 @@ pub struct SafetyConfig {
     pub max_consecutive_misses: u32,
 }
 
+/// Most ticks the loop-deadline watchdog's window can span (one `u64` of history).
+pub const MAX_DEADLINE_WINDOW_TICKS: u32 = 64;
+
 impl Default for SafetyConfig {
     fn default() -> Self {
         SafetyConfig {
@@ -316,7 +381,11 @@ impl Default for SafetyConfig {
             wall_damping_n_s_per_m: 400.0,
             position_trip_margin_m: 0.02,
             nonfinite_force_ticks: 4,
-            stale_force_ticks: None,
+            stale_force_ticks: 40,
+            encoder_stall_force_n: 50.0,
+            encoder_stall_ticks: 80,
+            deadline_window_ticks: 64,
+            max_deadline_overruns: 4,
             encoder_jump_m: 0.001,
             max_consecutive_misses: 0,
         }
@@ -455,10 +524,41 @@ impl ControllerConfig {
                 "must be > 0, got 0".to_owned(),
             );
         }
-        if sa.stale_force_ticks == Some(0) {
+        if sa.stale_force_ticks == 1 {
             c.fail(
                 "safety.stale_force_ticks",
-                "must be > 0 when set, got 0".to_owned(),
+                "must be 0 (off) or >= 2 (every reading is a run of one), got 1".to_owned(),
+            );
+        }
+        c.positive("safety.encoder_stall_force_n", sa.encoder_stall_force_n);
+        let limit = sa.force_limit_n[0].min(sa.force_limit_n[1]);
+        if sa.encoder_stall_ticks > 0
+            && sa.encoder_stall_force_n.is_finite()
+            && limit.is_finite()
+            && sa.encoder_stall_force_n > limit
+        {
+            c.fail(
+                "safety.encoder_stall_force_n",
+                format!(
+                    "must be <= the smaller safety.force_limit_n = {limit} (a clamped command never reaches it), got {}",
+                    sa.encoder_stall_force_n
+                ),
+            );
+        }
+        let window = sa.deadline_window_ticks;
+        if window > MAX_DEADLINE_WINDOW_TICKS {
+            c.fail(
+                "safety.deadline_window_ticks",
+                format!("must be 0 (off) or <= {MAX_DEADLINE_WINDOW_TICKS}, got {window}"),
+            );
+        } else if window > 0 && sa.max_deadline_overruns >= window.div_ceil(2) {
+            c.fail(
+                "safety.max_deadline_overruns",
+                format!(
+                    "must be < {} (a {window}-tick window holds at most that many late ticks, so the watchdog could never trip), got {}",
+                    window.div_ceil(2),
+                    sa.max_deadline_overruns
+                ),
             );
         }
         c.positive("safety.encoder_jump_m", sa.encoder_jump_m);

@@ -6,7 +6,14 @@
 //! advance perturbations and the control law (admittance or virtual spring) by one
 //! exact step. On motor ticks (`tick % divisor == 0`, 2 kHz by default) the renderer
 //! computes a new motor command; in between the last one is held. Any trip makes the
-//! command written at that same tick zero. `tick` does not allocate, lock or block.
+//! command written at that same tick zero, a non-finite command included (it trips
+//! before it is clamped). `tick` does not allocate, lock or block.
+//!
+//! The safety layer sees every reading (force, encoder counts), every command written
+//! and every tick number the loop passes in; its watchdogs (stale force, encoder stall,
+//! loop deadline, see [`crate::safety`]) count from those alone. Time is only what the
+//! loop says `now` is: a tick after skipped ones is judged by its gap (a clock skip,
+//! `safety.max_consecutive_misses`) and by how often it happens (a deadline overrun).
 
 use crate::admittance::Admittance;
 use crate::calib::{ForceCalibration, counts_to_m};
@@ -430,6 +437,7 @@ impl Controller {
         } else {
             [0.0; 2]
         };
+        self.safety.observe_command(command);
         if let Err(e) = io.write(now, MotorCommand { force_n: command }) {
             self.trip(
                 now,
@@ -507,6 +515,9 @@ impl Controller {
                 },
             );
         }
+        self.safety.observe_encoders(frame);
+        self.safety
+            .observe_clock(now, self.last_tick, self.mode == Mode::Active);
         if let Some(reason) = self.safety.check(frame, position, step, velocity) {
             self.trip(now, reason);
         }
@@ -589,6 +600,11 @@ impl Controller {
                 self.position_m,
                 self.report.velocity_m_per_s,
             );
+            if let Some(reason) = SafetyMonitor::nonfinite_command(cmd) {
+                // The law's state is broken: nothing it computes now can be sent.
+                self.trip(now, reason);
+                return [0.0; 2];
+            }
             let (clamped, saturated) = self.safety.clamp(cmd);
             self.held_n = clamped;
             self.saturated = saturated;

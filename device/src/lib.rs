@@ -22,15 +22,17 @@
 //! ```text
 //!  sensors ─▶ counts→m, calibrate force, filtered-difference velocity
 //!          ─▶ safety checks (e-stop, I/O, non-finite/stale force, encoder jump,
-//!             velocity, position, missed tick)          ── trip ─▶ Fault, zero force
+//!             position, velocity, encoder stall, missed or
+//!             too often late ticks)                      ── trip ─▶ Fault, zero force
 //!          ─▶ perturbations: force pulse u_pert (000_* eq. 22-23),
 //!             position offset p (001_*, min-snap transitions)
 //!          ─▶ law, exact step for the held input:
 //!               admittance    M ẍ_r + D ẋ_r = F + u_pert + F_wall      (000_* eq. 20)
 //!               virtual spring M_e ẍ_e + B_e(ẋ_e − ẋ_a) + K_e(x_e − x_a) = F + …
 //!                             anchored to the imposed sinusoid x_a     (001_* eq. 4)
-//!          ─▶ render (motor ticks): F_cmd = m ẍ_ref + K_p e + K_d ė, clamped
-//!          ─▶ write
+//!          ─▶ render (motor ticks): F_cmd = m ẍ_ref + K_p e + K_d ė,
+//!             non-finite ── trip ─▶ Fault, zero force; else clamped
+//!          ─▶ write (the safety layer notes the command for the stall watchdog)
 //! ```
 //!
 //! ## Lifecycle
@@ -53,7 +55,12 @@
 //! ```
 //!
 //! A trip is an e-stop, an I/O error, a non-finite or frozen force sensor, an encoder
-//! jump, a velocity or position limit, or (while active) a missed tick.
+//! jump, a velocity or position limit, a stalled encoder (a large command and not one
+//! count of motion), a non-finite motor command, or (while active) a missed tick or too
+//! many late ticks in a short window. The three watchdogs that look for a part gone
+//! quiet (stale force, encoder stall, loop deadline) are on by default; a noiseless
+//! simulated sensor, which repeats its readings legitimately, is run with
+//! `safety.stale_force_ticks = 0` ([`config::SafetyConfig`]).
 //!
 //! `Configured`, `Inactive` and `Fault` command zero force; the safety layer watches in
 //! every mode. A trip records a [`safety::SafetyEvent`] `{tick, reason}` in a
@@ -63,11 +70,12 @@
 //!
 //! ```
 //! use rigtwin_device::perturb::force_pulse::PulseTrigger;
-//! use rigtwin_device::testing::MockRig;
-//! use rigtwin_device::{Controller, ControllerConfig, Mode, Tick};
+//! use rigtwin_device::testing::PointMassRig;
+//! use rigtwin_device::{Controller, ControllerConfig, Mode, Rate, Tick};
 //!
-//! let mut rig = MockRig::default(); // or world's SimRig, or a replay
-//! rig.frame.force_raw_n = [2.0, 0.0];
+//! // Point-mass carts and a hand pushing 2 N along x; or world's SimRig, or a replay.
+//! let mut rig = PointMassRig::new([4.0, 2.0], Rate::CONTROL);
+//! rig.hand_force_n = [2.0, 0.0];
 //! let mut ctl = Controller::new(ControllerConfig::default())?; // the Börner rig
 //! ctl.tick(&mut rig, Tick(0)); // Configured → Inactive
 //! ctl.activate()?;

@@ -2,11 +2,29 @@
 //! sets, and a point-mass rig that closes the loop with exact double-integrator carts.
 //! Public so other rooms' tests can drive the controller without the simulator.
 //! [`alloc`] is the counting allocator of the tests that prove a tick allocates nothing.
+//!
+//! The point-mass rig's force sensor is live: its reading carries a ±1 mN square wave
+//! (the last bits of a real ADC always move), so the stale-force watchdog sees a working
+//! sensor. The mock reads back exactly what the test set: a frame held for 40 ticks is
+//! a frozen sensor, and carts that never move under a growing command are a dead
+//! encoder. Tests of the control law on the mock say so with [`scripted`].
 
 pub mod alloc;
 
+use crate::config::ControllerConfig;
 use crate::io::{ErrorKind, MotorCommand, RigIo, RigIoError, SensorFrame};
 use crate::time::{Rate, Tick};
+
+/// `config` with the two watchdogs that a scripted [`MockRig`] cannot satisfy switched
+/// off: the stale-force watchdog (the mock repeats its frame bit for bit) and the
+/// encoder-stall watchdog (its carts stay where the test put them, whatever the
+/// command). For tests of the control law, not of the safety layer.
+#[must_use]
+pub fn scripted(mut config: ControllerConfig) -> ControllerConfig {
+    config.safety.stale_force_ticks = 0;
+    config.safety.encoder_stall_ticks = 0;
+    config
+}
 
 /// The mock's error: just a kind.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -57,7 +75,8 @@ impl RigIo for MockRig {
 /// Two independent carts as point masses, integrated exactly for the held motor plus
 /// hand force over each tick, with a hand modelled as a constant force plus a
 /// spring-damper to an anchor. Encoders quantise the position; the force sensor reads
-/// the hand force exactly (identity calibration).
+/// the hand force (identity calibration) plus `force_dither_n` with the sign
+/// alternating from one read to the next.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PointMassRig {
     /// Moving mass per axis, kg.
@@ -80,6 +99,13 @@ pub struct PointMassRig {
     pub estop: bool,
     /// The last command written.
     pub command: MotorCommand,
+    /// Amplitude of the square wave on the force reading, N (default 1 mN, about one
+    /// LSB of a strain-gauge ADC): a live sensor's last bits move every reading. At the
+    /// 2 kHz Nyquist rate and zero mean it moves the default 5 kg admittance by
+    /// ~1e-11 m. 0 makes the sensor noiseless (and frozen to the stale-force watchdog
+    /// whenever the hand force is constant).
+    pub force_dither_n: f64,
+    reads: u64,
     period_s: f64,
 }
 
@@ -98,6 +124,8 @@ impl PointMassRig {
             m_per_count: [1e-6; 2],
             estop: false,
             command: MotorCommand::ZERO,
+            force_dither_n: 1e-3,
+            reads: 0,
             period_s: rate.period_s(),
         }
     }
@@ -119,9 +147,16 @@ impl RigIo for PointMassRig {
 
     fn read(&mut self, _now: Tick) -> Result<SensorFrame, Self::Error> {
         let counts = |i: usize| (self.position_m[i] / self.m_per_count[i]).round() as i64;
+        let dither = if self.reads.is_multiple_of(2) {
+            self.force_dither_n
+        } else {
+            -self.force_dither_n
+        };
+        self.reads += 1;
+        let hand = self.hand_n();
         Ok(SensorFrame {
             encoder_counts: [counts(0), counts(1)],
-            force_raw_n: self.hand_n(),
+            force_raw_n: [hand[0] + dither, hand[1] + dither],
             estop: self.estop,
         })
     }

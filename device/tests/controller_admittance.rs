@@ -4,13 +4,16 @@
 #![allow(clippy::needless_range_loop)]
 
 use rigtwin_device::calib::ForceCalibration;
-use rigtwin_device::testing::{MockRig, PointMassRig};
+use rigtwin_device::testing::{MockRig, PointMassRig, scripted};
 use rigtwin_device::{Controller, ControllerConfig, Mode, Rate, Tick};
 
 /// The default config with the soft walls moved out of the way: these tests push the
-/// reference metres away, and a wall force would (rightly) break the closed form.
+/// reference metres away, and a wall force would (rightly) break the closed form. On the
+/// mock the force is held bit for bit and the carts never follow the reference, which
+/// the stale-force and encoder-stall watchdogs would (rightly) call a frozen sensor and a
+/// dead encoder: they are off here ([`scripted`]); `safety_trips.rs` tests them.
 fn unwalled() -> ControllerConfig {
-    let mut c = ControllerConfig::default();
+    let mut c = scripted(ControllerConfig::default());
     c.safety.wall_m = 100.0;
     c
 }

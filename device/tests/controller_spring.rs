@@ -3,14 +3,17 @@
 // Loops over the two axes index several per-axis arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-use rigtwin_device::testing::{MockRig, PointMassRig};
+use rigtwin_device::testing::{MockRig, PointMassRig, scripted};
 use rigtwin_device::{Controller, ControllerConfig, LawKind, Mode, Rate, Tick};
 
+/// The virtual-spring law on the mock, whose force is held bit for bit and whose carts
+/// never move: the stale-force and encoder-stall watchdogs are off ([`scripted`]), as
+/// the law, not the safety layer, is under test.
 fn spring_config(mass: f64, k: f64, b: f64) -> ControllerConfig {
-    let mut c = ControllerConfig {
+    let mut c = scripted(ControllerConfig {
         law: LawKind::VirtualSpring,
         ..ControllerConfig::default()
-    };
+    });
     c.virtual_spring.mass_kg = [mass; 2];
     c.virtual_spring.stiffness_n_per_m = [k; 2];
     c.virtual_spring.damping_n_s_per_m = [b; 2];

@@ -7,7 +7,7 @@ use rigtwin_device::perturb::Crossing;
 use rigtwin_device::perturb::force_pulse::{
     ForcePulse, G_MAX, PulseTrigger, normalized_force, normalized_jerk,
 };
-use rigtwin_device::testing::MockRig;
+use rigtwin_device::testing::{MockRig, scripted};
 use rigtwin_device::{Controller, ControllerConfig, PerturbationStatus, Rate, Tick};
 
 #[test]
@@ -60,7 +60,9 @@ fn third_difference_of_a_pure_mass_driven_by_the_pulse_is_eq_22() {
     // u̇_pert / M, i.e. eq. 22 scaled by A / (M T_p g_max). The third difference of the
     // reported reference, sample by sample, must give eq. 22 within the central-
     // difference error (4e-5, see above) plus rounding (~1e-7); bound 1e-4.
-    let mut config = ControllerConfig::default();
+    // The mock's force is zero bit for bit and its carts stay put: the stale-force and
+    // encoder-stall watchdogs are off ([`scripted`]); the law is under test.
+    let mut config = scripted(ControllerConfig::default());
     config.admittance.damping_n_s_per_m = [0.0, 0.0];
     let mass = config.admittance.mass_kg[0];
     let amp = config.force_pulse.amplitude_n;
@@ -122,7 +124,8 @@ fn line_crossing_fires_on_the_tick_the_handle_crosses() {
     // the tick where the count reaches −25 000: 500 steps after the start.
     let mut rig = MockRig::default();
     rig.frame.encoder_counts = [0, -30_000];
-    let mut c = Controller::new(ControllerConfig::default()).unwrap();
+    // The scripted force is zero bit for bit: the stale-force watchdog is off.
+    let mut c = Controller::new(scripted(ControllerConfig::default())).unwrap();
     c.tick(&mut rig, Tick(0));
     c.activate().unwrap();
     let trigger = PulseTrigger::LineCrossing {

@@ -7,7 +7,7 @@ use core::f64::consts::FRAC_PI_4;
 use rigtwin_device::config::{PositionPerturbationConfig, TransitionShape};
 use rigtwin_device::perturb::ArmError;
 use rigtwin_device::perturb::position::{PositionPerturbation, PositionTrigger, transition};
-use rigtwin_device::testing::MockRig;
+use rigtwin_device::testing::{MockRig, scripted};
 use rigtwin_device::{Controller, ControllerConfig, LawKind, PerturbationStatus, Rate, Tick};
 
 fn shapes() -> [TransitionShape; 2] {
@@ -87,10 +87,13 @@ fn fires_at_the_next_zero_acceleration_point_of_the_imposed_motion() {
     // Virtual spring with the 001_* sinusoid (±0.10 m, 0.125 Hz, 4 s ramp): the first
     // zero-acceleration point of the full-amplitude part is 4 s = 16 000 ticks after
     // the first active tick (tick 1).
-    let config = ControllerConfig {
+    // The mock's carts stay at the origin while the anchor sweeps ±0.10 m, and its force
+    // is zero bit for bit: the stale-force and encoder-stall watchdogs are off
+    // ([`scripted`]); the trigger is under test.
+    let config = scripted(ControllerConfig {
         law: LawKind::VirtualSpring,
         ..ControllerConfig::default()
-    };
+    });
     let mut rig = MockRig::default();
     let mut c = Controller::new(config).unwrap();
     c.tick(&mut rig, Tick(0));

@@ -198,11 +198,14 @@ pub(crate) fn length_factors(session: &Session, protocol: &Protocol) -> [f64; 2]
 }
 
 /// The protocol without motor and sensor noise (the encoder quantum stays: it is
-/// deterministic).
+/// deterministic). A noiseless simulated sensor may repeat its reading bit for bit (the
+/// handle at rest), which the controller's stale-force watchdog would take for a frozen
+/// sensor: it is switched off here, as for any simulation without sensor noise.
 pub(crate) fn noise_free(protocol: &Protocol) -> Protocol {
     let mut p = protocol.clone();
     p.subjects.arm.noise.activation_cv = 0.0;
     p.plant.force_noise_rms_n = 0.0;
+    p.controller.safety.stale_force_ticks = 0;
     p
 }
 
