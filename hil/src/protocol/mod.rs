@@ -844,10 +844,35 @@ fn parse_message(text: &str, e: &toml::de::Error) -> String {
             let before = &text[..span.start.min(text.len())];
             let line = 1 + before.matches('\n').count();
             let column = 1 + before.rsplit('\n').next().map_or(0, |l| l.chars().count());
-            format!("line {line}, column {column}: {message}")
+            match key_at(text, line) {
+                Some(key) => format!("line {line}, column {column}: field `{key}`: {message}"),
+                None => format!("line {line}, column {column}: {message}"),
+            }
         }
         None => message.into_owned(),
     }
+}
+
+/// The dotted key written on 1-based `line` (`reach.trials`), from its `key =` and the
+/// table header above it; `None` on a line without a key.
+fn key_at(text: &str, line: usize) -> Option<String> {
+    let lines: Vec<&str> = text.lines().take(line).collect();
+    let here = lines.last()?.trim();
+    let key = here
+        .split_once('=')
+        .map(|(k, _)| k.trim().trim_matches('"'))
+        .filter(|k| !k.is_empty() && !k.starts_with('#') && !k.starts_with('['))?;
+    let table = lines
+        .iter()
+        .rev()
+        .map(|l| l.trim())
+        .find(|l| l.starts_with('['))
+        .map(|l| l.trim_matches(|c| c == '[' || c == ']').trim());
+    let key = rigtwin_device::check::excerpt(key, 80);
+    Some(match table {
+        Some(t) if !t.is_empty() => format!("{t}.{key}"),
+        _ => key.into_owned(),
+    })
 }
 
 /// The most characters of a bad value a protocol error quotes.

@@ -180,7 +180,7 @@ mod tests {
         assert!(
             many.needs_confirmation()
                 .unwrap()
-                .contains("simulates 1.2 days")
+                .contains("simulates 29.2 h")
         );
         let rt = Cost::of(&p, 1, Some(4), 8, true);
         assert!(
