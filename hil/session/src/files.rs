@@ -142,8 +142,35 @@ pub fn read_regular(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
 /// # Errors
 /// As [`read_regular`]; `InvalidData` for text that is not UTF-8.
 pub fn read_regular_text(path: &Path, limit: u64) -> std::io::Result<String> {
-    String::from_utf8(read_regular(path, limit)?)
-        .map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()))
+    utf8(read_regular(path, limit)?)
+}
+
+/// `bytes` as text; invalid UTF-8 is an `InvalidData` error that names the line and
+/// column of the first bad byte.
+///
+/// # Errors
+/// `InvalidData`, located.
+pub fn utf8(bytes: Vec<u8>) -> std::io::Result<String> {
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let before = &bytes[..at];
+        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        let column = 1 + String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count();
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "line {line}, column {column}: not UTF-8 text (byte 0x{:02x})",
+                bytes[at]
+            ),
+        )
+    })
 }
 
 /// The most bytes a configuration file (a protocol, a model, a map) may have: 1 MiB,

@@ -108,12 +108,7 @@ impl Session {
             files::MAX_MANIFEST_BYTES,
             "a manifest may have (files::MAX_MANIFEST_BYTES)",
         )?;
-        let text = String::from_utf8(bytes).map_err(|e| {
-            SessionError::io(
-                &manifest_path,
-                std::io::Error::new(std::io::ErrorKind::InvalidData, e.utf8_error()),
-            )
-        })?;
+        let text = files::utf8(bytes).map_err(|e| SessionError::io(&manifest_path, e))?;
         let (manifest, lines) = manifest::parse(&text, &manifest_path)?;
         for (entry, at) in manifest.trials.iter().zip(&lines) {
             let path = entry.path_in(&dir);

@@ -60,7 +60,7 @@ fn located(errors: &[InvalidKey], lines: &[Option<usize>]) -> String {
         .zip(lines.iter().chain(std::iter::repeat(&None)))
         .map(|(e, l)| match l {
             Some(l) => format!("line {l}: {e}"),
-            None => e.to_string(),
+            None => format!("not in the file (its default): {e}"),
         })
         .collect::<Vec<_>>()
         .join("; ")

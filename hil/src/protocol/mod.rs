@@ -45,6 +45,10 @@ pub use subjects::{SubjectSpread, SubjectsConfig, VirtualSubject};
 /// 300 MB of samples. Longer is an error before anything is allocated.
 pub const MAX_TRIAL_S: f64 = 600.0;
 
+/// The longest protocol name, characters: it names the output folder
+/// (`out/<name>-<seed>/`), and file systems allow 255 bytes a name.
+pub const MAX_NAME_CHARS: usize = 100;
+
 /// The most trials per subject a protocol may ask for (a human session has a few hundred).
 pub const MAX_TRIALS: u32 = 10_000;
 
@@ -572,6 +576,7 @@ impl Protocol {
     pub fn validate(&self) -> Result<(), Vec<InvalidKey>> {
         let mut c = Checker::default();
         if self.name.trim().is_empty()
+            || self.name.len() > MAX_NAME_CHARS
             || !self
                 .name
                 .chars()
@@ -580,7 +585,7 @@ impl Protocol {
             c.fail(
                 "name",
                 format!(
-                    "must be a non-empty folder-safe name (letters, digits, - and _), got {:?}",
+                    "must be a folder-safe name of 1 to {MAX_NAME_CHARS} letters, digits, - and _, got {:?}",
                     self.name
                 ),
             );
