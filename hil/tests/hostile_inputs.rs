@@ -117,7 +117,7 @@ fn an_array_longer_than_its_key_is_refused() {
         &e,
         &[
             "line 51",
-            "controller.safety.force_limit_n has 3 elements; it takes 2",
+            "`controller.safety.force_limit_n` has 3 elements; it takes 2",
         ],
     );
 }
@@ -141,7 +141,7 @@ fn validation_errors_name_the_line_in_lf_and_crlf_files() {
             QUICK_S,
             None,
         );
-        assert_refused(&e, &[name, "line 22: reach.trials must be > 0"]);
+        assert_refused(&e, &[name, "line 22: `reach.trials` must be > 0"]);
     }
 }
 

@@ -53,14 +53,14 @@ impl ProtocolError {
     }
 }
 
-/// `line 17: reach.trials must be > 0, got 0; line 40: ...`.
+/// ``line 17: `reach.trials` must be > 0, got 0; line 40: ...``.
 fn located(errors: &[InvalidKey], lines: &[Option<usize>]) -> String {
     errors
         .iter()
         .zip(lines.iter().chain(std::iter::repeat(&None)))
         .map(|(e, l)| match l {
-            Some(l) => format!("line {l}: {e}"),
-            None => format!("not in the file (its default): {e}"),
+            Some(l) => format!("line {l}: `{}` {}", e.key, e.problem),
+            None => format!("not in the file (its default): `{}` {}", e.key, e.problem),
         })
         .collect::<Vec<_>>()
         .join("; ")
