@@ -644,9 +644,7 @@ pub fn recover(dir: impl AsRef<Path>) -> Result<Vec<Recovered>, SessionError> {
     let _lock = DirLock::take(dir)?;
     remove_if_present(&dir.join(format!("{MANIFEST_FILE}.tmp")))?;
     let mut recovered = Vec::new();
-    for sidecar in sidecars(dir)? {
-        let text = fs::read_to_string(&sidecar).map_err(|e| SessionError::io(&sidecar, e))?;
-        let (mut entry, _) = manifest::parse_trial_entry(&text, &sidecar)?;
+    for (sidecar, mut entry) in sidecar_entries(dir)? {
         let final_path = entry.path_in(dir);
         let partial = partial_of(&final_path);
         if manifest.trials.iter().any(|t| t.id == entry.id) {
@@ -693,6 +691,18 @@ pub fn recover(dir: impl AsRef<Path>) -> Result<Vec<Recovered>, SessionError> {
         remove_if_present(&sidecar)?;
     }
     Ok(recovered)
+}
+
+/// Each sidecar a killed writer left, with the trial entry it holds.
+fn sidecar_entries(dir: &Path) -> Result<Vec<(PathBuf, TrialEntry)>, SessionError> {
+    sidecars(dir)?
+        .into_iter()
+        .map(|sidecar| {
+            let text = fs::read_to_string(&sidecar).map_err(|e| SessionError::io(&sidecar, e))?;
+            let (entry, _) = manifest::parse_trial_entry(&text, &sidecar)?;
+            Ok((sidecar, entry))
+        })
+        .collect()
 }
 
 /// `trials/NNNN.csv.partial` for `trials/NNNN.csv`: where the writer records a trial.
@@ -775,9 +785,7 @@ pub fn repair(dir: impl AsRef<Path>) -> Result<Repaired, SessionError> {
         remove_if_present(&tmp)?;
         done.removed.push(tmp);
     }
-    for sidecar in sidecars(dir)? {
-        let text = fs::read_to_string(&sidecar).map_err(|e| SessionError::io(&sidecar, e))?;
-        let (mut entry, _) = manifest::parse_trial_entry(&text, &sidecar)?;
+    for (sidecar, mut entry) in sidecar_entries(dir)? {
         let final_path = entry.path_in(dir);
         let partial = partial_of(&final_path);
         if manifest.trials.iter().any(|t| t.id == entry.id) {

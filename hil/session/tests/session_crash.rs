@@ -119,6 +119,20 @@ fn spawn(dir: &Path, pause_at: Option<u64>) -> std::process::Child {
     cmd.spawn().unwrap()
 }
 
+/// A child writer in `dir`, paused (alive, holding its files) after `n` samples.
+fn paused(dir: &Path, n: u64) -> std::process::Child {
+    let child = spawn(dir, Some(n));
+    let start = Instant::now();
+    while !dir.join("ready").exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "child never reached {n} samples"
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child
+}
+
 /// Every trial is a prefix of what was pushed, ids 1, 2, ... in order; returns the
 /// total number of samples.
 fn check_prefix(s: &Session) -> u64 {
@@ -172,15 +186,7 @@ fn kill_after_n_samples_loses_at_most_10_ms() {
     points.extend((0..4).map(|_| rng.random_range(1..=total)));
     for n in points {
         let tmp = tempfile::tempdir().unwrap();
-        let mut child = spawn(tmp.path(), Some(n));
-        let start = Instant::now();
-        while !tmp.path().join("ready").exists() {
-            assert!(
-                start.elapsed() < Duration::from_secs(60),
-                "child never reached {n} samples"
-            );
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        let mut child = paused(tmp.path(), n);
         child.kill().unwrap();
         child.wait().unwrap();
         let dir = tmp.path().join("s");
@@ -240,15 +246,7 @@ fn repair_after_a_kill_gives_the_uninterrupted_runs_trials_and_sets_the_cut_one_
     // Mid trial 2, at the last row of trial 2, and inside trial 4.
     for n in [ROWS + 250, 2 * ROWS, 3 * ROWS + 1] {
         let tmp = tempfile::tempdir().unwrap();
-        let mut child = spawn(tmp.path(), Some(n));
-        let start = Instant::now();
-        while !tmp.path().join("ready").exists() {
-            assert!(
-                start.elapsed() < Duration::from_secs(60),
-                "child never reached {n}"
-            );
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        let mut child = paused(tmp.path(), n);
         let dir = tmp.path().join("s");
         let busy = SessionWriter::resume(&dir).unwrap_err().to_string();
         assert!(busy.contains("another writer"), "{busy}");
