@@ -21,10 +21,24 @@ fn main() -> ExitCode {
             {
                 return ExitCode::SUCCESS;
             }
-            // `{:#}` prints the context chain on one line: "reading session X: file:line: ...".
             // If standard error itself cannot be written, the exit status is all that is left.
-            let _ = writeln!(std::io::stderr().lock(), "error: {e:#}");
+            let _ = writeln!(std::io::stderr().lock(), "error: {}", one_line(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes on one line, "reading session X: file:line: ...", each cause
+/// once: many errors already show their source in their own text (`{file}: {source}`),
+/// and `{:#}` would print it again after them.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let c = cause.to_string();
+        if !text.contains(&c) {
+            text.push_str(": ");
+            text.push_str(&c);
+        }
+    }
+    text
 }

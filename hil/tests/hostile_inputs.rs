@@ -489,3 +489,45 @@ fn two_rehearsals_into_one_folder_do_not_interleave() {
     let s = rigtwin::session::Session::read(d.path().join("same/S01")).unwrap();
     assert_eq!(s.trials.len(), 20);
 }
+
+/// A full disk mid-run: a clear error naming the file and "No space left on device",
+/// exit 1, and every trial completed before it reads. The disk is a 3 MB tmpfs mounted in
+/// a private mount namespace (`unshare -m`, as root: the CI machine runs as root), so it
+/// vanishes with the child; the child copies the session out before it ends.
+#[test]
+fn a_full_disk_is_a_clear_error_and_keeps_the_completed_trials() {
+    let d = tempfile::tempdir().unwrap();
+    let small = d.path().join("small");
+    std::fs::create_dir(&small).unwrap();
+    let script = format!(
+        "mount -t tmpfs -o size=3m tmpfs '{small}' && cd '{small}' && \
+         '{exe}' rehearse reach-perturb --max-trials 20 --jobs 1 --out full 2> ../stderr; \
+         echo $? > ../status; cp -r full/S01 ../copy",
+        small = small.display(),
+        exe = hostile::exe().display()
+    );
+    let status = std::process::Command::new("unshare")
+        .args(["-m", "sh", "-c", &script])
+        .status()
+        .unwrap();
+    assert!(status.success(), "unshare -m and mount need root: {status}");
+    let code = std::fs::read_to_string(d.path().join("status")).unwrap();
+    let stderr = std::fs::read_to_string(d.path().join("stderr")).unwrap();
+    assert_eq!(code.trim(), "1", "{stderr}");
+    assert!(stderr.contains("No space left on device"), "{stderr}");
+    assert!(
+        stderr.contains(".csv.partial") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
+    // Each trial is about 460 kB: 3 MB holds a few.
+    let s = rigtwin::session::Session::read(d.path().join("copy")).unwrap();
+    assert!(
+        (1..20).contains(&s.trials.len()),
+        "{} trials",
+        s.trials.len()
+    );
+    assert!(
+        s.trials.iter().all(|t| t.len() == 3500),
+        "listed trials are whole"
+    );
+}
