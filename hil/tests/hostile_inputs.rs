@@ -531,3 +531,37 @@ fn a_full_disk_is_a_clear_error_and_keeps_the_completed_trials() {
         "listed trials are whole"
     );
 }
+
+/// A protocol whose simulated force sensor has no noise: the reading repeats exactly at
+/// rest, which the stale-force watchdog (on by default, for a live ADC) must not take for
+/// a frozen bus. The calibration rig at rest tripped it in 2 of 3 trials before.
+#[test]
+fn a_noise_free_simulated_sensor_does_not_trip_the_stale_force_watchdog() {
+    let d = tempfile::tempdir().unwrap();
+    let text = rigtwin::protocol::BUILTIN[2].1;
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("force_noise_rms_n"))
+        .unwrap();
+    std::fs::write(
+        d.path().join("p.toml"),
+        text.replacen(line, "force_noise_rms_n = 0.0", 1),
+    )
+    .unwrap();
+    let e = run_in(
+        d.path(),
+        &[
+            "rehearse",
+            "p.toml",
+            "--max-trials",
+            "3",
+            "--out",
+            "o",
+            "--json",
+        ],
+        300.0,
+        None,
+    );
+    assert_eq!(e.code, Some(0), "{e:?}");
+    assert!(!e.stdout.contains("StaleForce"), "{}", e.stdout);
+}

@@ -311,7 +311,9 @@ pub struct PlantConfig {
     pub rail_limits_m: [[f64; 2]; 2],
     /// Encoder quantum, m.
     pub encoder_quantum_m: f64,
-    /// Force-sensor noise, N RMS per axis at 4 kHz.
+    /// Force-sensor noise, N RMS per axis at 4 kHz. At 0 the simulated reading repeats
+    /// exactly when the handle is still, so the controller's stale-force watchdog is off
+    /// in such a rehearsal (it guards a live ADC).
     pub force_noise_rms_n: f64,
     /// rapier solver settings.
     pub solver: SolverConfig,

@@ -227,6 +227,12 @@ pub fn controller_parts(
 ) -> Result<ControllerParts, RehearseError> {
     let seed = |s: Stream| trial_seed(session_seed, subject.index, plan.index, s);
     let mut ctl_cfg = protocol.controller.clone();
+    // The stale-force watchdog guards a live strain-gauge ADC, whose last bits always
+    // move; a simulated sensor without noise repeats its reading exactly whenever the
+    // handle is still (the calibration rig at rest tripped it), so it is off there.
+    if protocol.plant.force_noise_rms_n == 0.0 {
+        ctl_cfg.safety.stale_force_ticks = 0;
+    }
     let rate_div = (TICK_HZ / u64::from(protocol.recording.rate_hz)).max(1);
     trial_task(protocol, subject, plan, &mut ctl_cfg);
     let controller = Controller::new(ctl_cfg)?;
