@@ -18,6 +18,10 @@ pub const MAX_TRIAL_S: f64 = 3600.0;
 /// The widest row a reader expects, bytes: 32 columns of 16 characters.
 pub const MAX_ROW_BYTES: f64 = 512.0;
 
+/// The most bytes a configuration file (a protocol, a model, a map) may have: 1 MiB,
+/// a hundred times the largest shipped one.
+pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+
 /// The most bytes any trial file may have, whatever its rate: 8 GiB.
 pub const MAX_TRIAL_BYTES: u64 = 8 << 30;
 
@@ -106,13 +110,13 @@ pub fn read_bounded(path: &Path, limit: u64, why: &str) -> Result<Vec<u8>, Sessi
     Ok(bytes)
 }
 
-/// Where `path` leads if that is outside `dir` (both resolved through links), or `None`
-/// when it stays inside or cannot be resolved (a missing file is reported elsewhere).
+/// Where `path` leads if that is outside `resolved_dir` (a directory already resolved
+/// through links), or `None` when it stays inside or cannot be resolved (a missing file
+/// is reported elsewhere).
 #[must_use]
-pub fn escapes(dir: &Path, path: &Path) -> Option<PathBuf> {
-    let dir = std::fs::canonicalize(dir).ok()?;
+pub fn escapes(resolved_dir: &Path, path: &Path) -> Option<PathBuf> {
     let resolved = std::fs::canonicalize(path).ok()?;
-    (!resolved.starts_with(&dir)).then_some(resolved)
+    (!resolved.starts_with(resolved_dir)).then_some(resolved)
 }
 
 /// [`read_bounded`] for readers with errors of their own (protocols, model files, map
@@ -154,15 +158,7 @@ pub fn utf8(bytes: Vec<u8>) -> std::io::Result<String> {
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let bytes = e.as_bytes();
-        let before = &bytes[..at];
-        let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        let column = 1 + String::from_utf8_lossy(&before[line_start..])
-            .chars()
-            .count();
+        let (line, column) = line_column(bytes, at);
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!(
@@ -173,6 +169,18 @@ pub fn utf8(bytes: Vec<u8>) -> std::io::Result<String> {
     })
 }
 
-/// The most bytes a configuration file (a protocol, a model, a map) may have: 1 MiB,
-/// a hundred times the largest shipped one.
-pub const MAX_CONFIG_BYTES: u64 = 1 << 20;
+/// The 1-based line and column (in characters) of byte offset `at` in `text`: lines end
+/// at `\n`, so CRLF text counts as LF text does. For errors that point into a file.
+#[must_use]
+pub fn line_column(text: &[u8], at: usize) -> (usize, usize) {
+    let before = &text[..at.min(text.len())];
+    let line = 1 + before.iter().filter(|&&b| b == b'\n').count();
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    let column = 1 + String::from_utf8_lossy(&before[line_start..])
+        .chars()
+        .count();
+    (line, column)
+}

@@ -42,26 +42,6 @@ pub const MANIFEST_FILE: &str = "session.toml";
 /// Where the trial files' size bound comes from, for its error.
 const TRIAL_BOUND: &str = "a trial table at the manifest's rate_hz may have (an hour of 512-byte rows, files::max_trial_bytes)";
 
-/// A trial file that a symbolic link leads out of the session directory is refused: a
-/// session is read as one folder, and its readers must not be pointed at other files.
-fn check_inside(
-    dir: &Path,
-    manifest_path: &Path,
-    at: &manifest::EntryLines,
-    path: &Path,
-) -> Result<(), SessionError> {
-    match files::escapes(dir, path) {
-        None => Ok(()),
-        Some(resolved) => Err(SessionError::OutsideSession {
-            file: manifest_path.to_path_buf(),
-            line: at.file,
-            field: "trial.file".into(),
-            path: path.to_path_buf(),
-            resolved,
-        }),
-    }
-}
-
 /// A whole session in memory: the manifest and every trial, in manifest order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Session {
@@ -110,25 +90,19 @@ impl Session {
         )?;
         let text = files::utf8(bytes).map_err(|e| SessionError::io(&manifest_path, e))?;
         let (manifest, lines) = manifest::parse(&text, &manifest_path)?;
-        for (entry, at) in manifest.trials.iter().zip(&lines) {
-            let path = entry.path_in(&dir);
-            if !path.exists() {
-                return Err(SessionError::TrialFileMissing {
-                    file: manifest_path,
-                    line: at.file,
-                    field: "trial.file".into(),
-                    missing: path,
-                });
-            }
-            check_inside(&dir, &manifest_path, at, &path)?;
-            files::check_regular(&path, files::max_trial_bytes(manifest.rate_hz), TRIAL_BOUND)?;
-        }
-        Ok(SessionReader {
+        let reader = SessionReader {
+            // Resolved once: every trial file is checked against it.
+            resolved_dir: std::fs::canonicalize(&dir).ok(),
             dir,
             manifest_path,
             manifest,
             lines,
-        })
+        };
+        for (entry, at) in reader.manifest.trials.iter().zip(&reader.lines) {
+            let path = reader.trial_path(entry, at)?;
+            files::check_regular(&path, reader.max_trial_bytes(), TRIAL_BOUND)?;
+        }
+        Ok(reader)
     }
 
     /// Each trial's entry with its table, in manifest order.
@@ -147,6 +121,8 @@ impl Session {
 #[derive(Debug, Clone)]
 pub struct SessionReader {
     dir: PathBuf,
+    /// `dir` resolved through links (`None` if it cannot be).
+    resolved_dir: Option<PathBuf>,
     manifest_path: PathBuf,
     manifest: Manifest,
     lines: Vec<manifest::EntryLines>,
@@ -188,11 +164,14 @@ impl SessionReader {
             .map(|(e, at)| self.read_entry(e, at).map(|t| (e, t)))
     }
 
-    fn read_entry(
+    /// The trial file of `entry`, which must exist and, resolved through links, lie
+    /// inside the session directory: a session is read as one folder, and its readers
+    /// must not be pointed at other files.
+    fn trial_path(
         &self,
         entry: &TrialEntry,
         at: &manifest::EntryLines,
-    ) -> Result<Trial, SessionError> {
+    ) -> Result<PathBuf, SessionError> {
         let path = entry.path_in(&self.dir);
         if !path.exists() {
             return Err(SessionError::TrialFileMissing {
@@ -202,12 +181,34 @@ impl SessionReader {
                 missing: path,
             });
         }
-        check_inside(&self.dir, &self.manifest_path, at, &path)?;
-        let bytes = files::read_bounded(
-            &path,
-            files::max_trial_bytes(self.manifest.rate_hz),
-            TRIAL_BOUND,
-        )?;
+        if let Some(resolved) = self
+            .resolved_dir
+            .as_deref()
+            .and_then(|dir| files::escapes(dir, &path))
+        {
+            return Err(SessionError::OutsideSession {
+                file: self.manifest_path.clone(),
+                line: at.file,
+                field: "trial.file".into(),
+                path,
+                resolved,
+            });
+        }
+        Ok(path)
+    }
+
+    /// The size bound of a trial table at this session's rate.
+    fn max_trial_bytes(&self) -> u64 {
+        files::max_trial_bytes(self.manifest.rate_hz)
+    }
+
+    fn read_entry(
+        &self,
+        entry: &TrialEntry,
+        at: &manifest::EntryLines,
+    ) -> Result<Trial, SessionError> {
+        let path = self.trial_path(entry, at)?;
+        let bytes = files::read_bounded(&path, self.max_trial_bytes(), TRIAL_BOUND)?;
         if let Some(expected) = entry.sha256 {
             let actual = Sha256::of(&bytes);
             if actual != expected {
