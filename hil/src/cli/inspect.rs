@@ -101,6 +101,25 @@ struct Leftover {
     complete_rows: Option<usize>,
 }
 
+/// Complete rows of a partial trial table: lines ended by `\n`, less the header. Counted
+/// block by block, so a large table is never held in memory, and only in a regular file
+/// of at most what a trial may be.
+fn complete_rows(file: &std::path::Path) -> Option<usize> {
+    use std::io::Read as _;
+    let limit = rigtwin::session::files::MAX_TRIAL_BYTES;
+    rigtwin::session::files::check_regular(file, limit, "a trial may have").ok()?;
+    let mut reader = std::fs::File::open(file).ok()?.take(limit);
+    let mut block = vec![0_u8; 1 << 16];
+    let mut lines = 0_usize;
+    loop {
+        let n = reader.read(&mut block).ok()?;
+        if n == 0 {
+            return Some(lines.saturating_sub(1));
+        }
+        lines += block[..n].iter().filter(|&&c| c == b'\n').count();
+    }
+}
+
 /// The leftovers of `dir`, each described.
 fn leftovers(dir: &std::path::Path) -> anyhow::Result<Vec<Leftover>> {
     let files = rigtwin::session::leftovers(dir)
@@ -114,13 +133,7 @@ fn leftovers(dir: &std::path::Path) -> anyhow::Result<Vec<Leftover>> {
             .and_then(|p| p.file_name())
             .is_some_and(|n| n == rigtwin::session::SET_ASIDE_DIR);
         let (what, complete_rows) = if name.contains(".csv.partial") {
-            // Bounded: a partial table is at most what a trial may be.
-            let rows = rigtwin::session::files::read_regular(
-                &file,
-                rigtwin::session::files::MAX_TRIAL_BYTES,
-            )
-            .ok()
-            .map(|b| b.iter().filter(|&&c| c == b'\n').count().saturating_sub(1));
+            let rows = complete_rows(&file);
             let what = if in_set_aside {
                 "incomplete trial table, set aside"
             } else {

@@ -53,34 +53,31 @@ fn span_of(root: &Spanned<DeTable<'_>>, dotted: &str) -> Option<Range<usize>> {
     found
 }
 
-/// 1-based line of byte `at` in `text`.
-fn line_at(text: &str, at: usize) -> usize {
-    1 + text.as_bytes()[..at.min(text.len())]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-}
-
-/// The line of each key of `errors` in `text` (`None` where the text does not have it).
+/// The line of each key of `errors` in `text`, parsed as `root` (`None` where the text
+/// does not have it, or did not parse).
 #[must_use]
-pub(crate) fn lines_of(text: &str, errors: &[InvalidKey]) -> Vec<Option<usize>> {
-    let Ok(root) = DeTable::parse(text) else {
+pub(crate) fn lines_of(
+    text: &str,
+    root: Option<&Spanned<DeTable<'_>>>,
+    errors: &[InvalidKey],
+) -> Vec<Option<usize>> {
+    let Some(root) = root else {
         return vec![None; errors.len()];
     };
     errors
         .iter()
-        .map(|e| span_of(&root, &e.key).map(|s| line_at(text, s.start)))
+        .map(|e| {
+            span_of(root, &e.key)
+                .map(|s| rigtwin_session::files::line_column(text.as_bytes(), s.start).0)
+        })
         .collect()
 }
 
-/// Every array in `text` with more elements than the same key has in `parsed` (the
-/// protocol as serde kept it, written back): serde fills `[f64; 2]` from the first two
-/// elements of a longer array without a word.
+/// Every array of the document `root` with more elements than the same key has in
+/// `parsed` (the protocol as serde kept it, written back): serde fills `[f64; 2]` from
+/// the first two elements of a longer array without a word.
 #[must_use]
-pub(crate) fn cut_arrays(text: &str, parsed: &toml::Value) -> Vec<InvalidKey> {
-    let Ok(root) = DeTable::parse(text) else {
-        return Vec::new();
-    };
+pub(crate) fn cut_arrays(root: &Spanned<DeTable<'_>>, parsed: &toml::Value) -> Vec<InvalidKey> {
     let mut out = Vec::new();
     if let toml::Value::Table(kept) = parsed {
         walk_table(root.get_ref(), kept, "", &mut out);

@@ -443,9 +443,13 @@ impl Protocol {
             path: path.to_path_buf(),
             message: parse_message(text, &e),
         })?;
-        let mut errors = toml::Value::try_from(&protocol)
-            .map(|kept| locate::cut_arrays(text, &kept))
-            .unwrap_or_default();
+        // The document with its spans, parsed once: for the arrays serde cut and for the
+        // lines of the keys that fail.
+        let root = toml::de::DeTable::parse(text).ok();
+        let mut errors = match (&root, toml::Value::try_from(&protocol)) {
+            (Some(root), Ok(kept)) => locate::cut_arrays(root, &kept),
+            _ => Vec::new(),
+        };
         if let Err(e) = protocol.validate() {
             errors.extend(e);
         }
@@ -454,7 +458,7 @@ impl Protocol {
         } else {
             Err(ProtocolError::Invalid {
                 path: path.to_path_buf(),
-                lines: locate::lines_of(text, &errors),
+                lines: locate::lines_of(text, root.as_ref(), &errors),
                 errors,
             })
         }
@@ -848,9 +852,7 @@ fn parse_message(text: &str, e: &toml::de::Error) -> String {
     let message = rigtwin_device::check::excerpt(e.message().trim_end(), MAX_QUOTE);
     match e.span() {
         Some(span) => {
-            let before = &text[..span.start.min(text.len())];
-            let line = 1 + before.matches('\n').count();
-            let column = 1 + before.rsplit('\n').next().map_or(0, |l| l.chars().count());
+            let (line, column) = rigtwin_session::files::line_column(text.as_bytes(), span.start);
             match key_at(text, line) {
                 Some(key) => format!("line {line}, column {column}: field `{key}`: {message}"),
                 None => format!("line {line}, column {column}: {message}"),
