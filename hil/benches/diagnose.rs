@@ -7,10 +7,10 @@
 use std::sync::atomic::AtomicBool;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use rigtwin::discrepancy::{DiagnoseOptions, diagnose};
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, diagnose};
 
 fn bench(c: &mut Criterion) {
     let tmp = tempfile::tempdir().unwrap();

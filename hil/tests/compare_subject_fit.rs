@@ -26,7 +26,7 @@
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
-use rigtwin::discrepancy::{CompareOptions, Comparison, compare};
+use rigtwin::compare::{CompareOptions, Comparison, compare};
 use rigtwin::protocol::{EstimateConfig, Protocol};
 use rigtwin::rehearse::{Options, rehearse};
 use rigtwin::report::borner_on_session;

@@ -9,10 +9,9 @@
 
 use std::path::PathBuf;
 
-use rigtwin::discrepancy::{
-    CompareOptions, Comparison, DiagnoseOptions, ExtendedModel, compare, diagnose,
-};
+use rigtwin::compare::{CompareOptions, Comparison, compare};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, ExtendedModel, diagnose};
 
 fn rmse(c: &Comparison, channel: &str, phase: &str) -> f64 {
     c.channels

@@ -6,8 +6,8 @@
 
 use std::path::PathBuf;
 
-use rigtwin::discrepancy::{DiagnoseOptions, ExtendedModel, diagnose, write_report};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, ExtendedModel, diagnose, write_report};
 
 #[test]
 fn example_ripple_is_found_and_its_model_round_trips() {

@@ -12,8 +12,8 @@
 
 use std::path::PathBuf;
 
-use rigtwin::discrepancy::{DiagnoseOptions, diagnose};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, diagnose};
 
 /// The shared recordings sit next to the repository (`../shared/recordings`); a
 /// checkout without them skips these checks with a message.
@@ -68,7 +68,7 @@ fn example_friction_names_rail_friction_with_disclosed_parameters() {
 
 /// The diagnosis of shared session `name` with every candidate's verdict printed, or
 /// `None` when the recordings are absent.
-fn diagnosis_of(name: &str) -> Option<rigtwin::discrepancy::Diagnosis> {
+fn diagnosis_of(name: &str) -> Option<rigtwin_diagnose::Diagnosis> {
     let dir = shared(name)?;
     let d = diagnose(&Session::read(&dir).unwrap(), &DiagnoseOptions::default())
         .unwrap()
@@ -124,7 +124,7 @@ fn without_the_command_the_plant_side_is_not_judged_and_the_hand_side_still_is()
     }
     let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
     let not: Vec<&str> = d.not_judged.iter().map(|n| n.effect.as_str()).collect();
-    assert_eq!(not, rigtwin::discrepancy::PLANT_SIDE);
+    assert_eq!(not, rigtwin_diagnose::PLANT_SIDE);
     for n in &d.not_judged {
         assert!(n.reason.contains("cmd_fx_n"), "{}", n.reason);
     }

@@ -129,7 +129,7 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
     assert!(d["unexplained"].is_null(), "{}", d["unexplained"]);
     // The written model carries every cause, the cogging on x alone, and the masses
     // fitted with the causes (none on the absent y axis).
-    let m = rigtwin::discrepancy::ExtendedModel::read(&model_file).unwrap();
+    let m = rigtwin_diagnose::ExtendedModel::read(&model_file).unwrap();
     assert_eq!(m.causes, names, "{m:?}");
     let ripple = m.effects.force_ripple.expect("the cogging is in the model");
     within("model cogging", ripple.amplitude_n[0], 0.8, 0.10);

@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use rerun::log::Chunk;
-use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, TrialTask};
 use rigtwin::report::piovesan_on_session;
@@ -18,6 +17,7 @@ use rigtwin::viz::impedance::{
     DAMPING_SCALE_M_PER_N_S_PER_M, STIFFNESS_SCALE_M_PER_N_PER_M, ellipse_names,
 };
 use rigtwin::viz::{Which, ellipse_axes, paths};
+use rigtwin_diagnose::ExtendedModel;
 use rigtwin_world::PlantEffects;
 use rigtwin_world::config::RailFriction;
 

@@ -18,8 +18,8 @@
 
 use std::path::{Path, PathBuf};
 
-use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use rigtwin_tests::generator::{Hidden, generate};
 
 /// Reaches per session: the shared sessions' 32.

@@ -29,8 +29,8 @@
 //! the false-alarm rate on sessions hiding nothing.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin_tests::generator::{
     Design, EFFECTS, Generated, OUT_OF_CATALOG, PAIRS, generate_design, parse_pulse,
 };
@@ -331,7 +331,7 @@ fn noise_free_reflex_is_found_and_nothing_else() {
 /// raises the ratio, what a longer session adds (more drift of the sensor and of the
 /// subject's impedance) too; measured 0.56 here (0.058 and 0.032), so 0.45–0.80 is
 /// asserted; outside it the floor would not be the pulses' noise. Without the
-/// per-response offsets ([`rigtwin::discrepancy::RESPONSE_OFFSET_COLUMNS`]) the
+/// per-response offsets ([`rigtwin_diagnose::RESPONSE_OFFSET_COLUMNS`]) the
 /// 24-pulse floor was 0.158 and the ratio 0.32: the reference mismatch of a few trials,
 /// not noise, set it. And more pulses, which give the replicate test more power, must
 /// not make it name a cause that is not there.

@@ -7,8 +7,8 @@
 //! stick–slip friction, a law the diagnosis's smoothed friction does not share.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use rigtwin::discrepancy::{DiagnoseOptions, Diagnosis, diagnose};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 use rigtwin_tests::servo_axis::{ServoAxis, run, write_session};
 
 fn diagnosed(axis: &ServoAxis, seed: u64) -> Diagnosis {

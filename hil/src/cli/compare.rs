@@ -6,8 +6,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use rigtwin::discrepancy::{CompareOptions, Comparison, ExtendedModel, compare};
+use rigtwin::compare::{CompareOptions, Comparison, compare};
 use rigtwin::session::Session;
+use rigtwin_diagnose::ExtendedModel;
 
 /// The arguments of `rigtwin compare` (the help text is on the subcommand).
 #[derive(Debug, Clone, clap::Args)]

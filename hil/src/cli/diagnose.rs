@@ -4,8 +4,8 @@
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use rigtwin::discrepancy::{DiagnoseOptions, ExtendedModel, diagnose, table, write_report};
 use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, ExtendedModel, diagnose, table, write_report};
 
 /// Name the effect, of the plant or of the human, that the nominal model misses in a
 /// measured session. Fits the plant-side catalog effects (rail-friction, force-ripple,

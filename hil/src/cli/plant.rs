@@ -5,9 +5,9 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::rehearse::TICK_HZ;
 use rigtwin::remote::{self, serve};
+use rigtwin_diagnose::ExtendedModel;
 use rigtwin_wire::{PlantEnd, PlantLimits, UdpTransport};
 
 use super::link::{LinkArgs, SessionArgs, timing_table};
@@ -96,7 +96,11 @@ fn seconds_to_ticks(flag: &str, s: f64) -> anyhow::Result<u64> {
 pub fn serve_run(args: &ServeArgs) -> anyhow::Result<()> {
     let (session, out) = args.session.plan("plant", |protocol| {
         if let Some(path) = &args.model {
-            ExtendedModel::read(path)?.apply_to(protocol);
+            let model = ExtendedModel::read(path)?;
+            model.apply_to(
+                &mut protocol.plant.effects,
+                &mut protocol.subjects.arm.stretch_reflex,
+            );
         }
         Ok(())
     })?;

@@ -6,10 +6,10 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 use anyhow::Context as _;
-use rigtwin::discrepancy::ExtendedModel;
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options, Progress};
 use rigtwin::report;
+use rigtwin_diagnose::ExtendedModel;
 
 /// Rehearse a protocol before human sessions: simulate it in lock step against virtual
 /// subjects, write one session per subject in the recording format, and report session
@@ -121,7 +121,10 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
     let mut protocol = Protocol::load(&args.protocol)?;
     if let Some(path) = &args.model {
         let model = ExtendedModel::read(path)?;
-        model.apply_to(&mut protocol);
+        model.apply_to(
+            &mut protocol.plant.effects,
+            &mut protocol.subjects.arm.stretch_reflex,
+        );
     }
     if args.subjects == Some(0) {
         anyhow::bail!("--subjects must be at least 1");

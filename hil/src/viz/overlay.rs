@@ -14,8 +14,8 @@
 
 use super::columns::{Stamp, TrialSpan};
 use super::{EventLevel, Viewer, VizError, paths};
-use crate::discrepancy::{Analysis, Baseline, Candidate as _, DiscrepancyError, Folds};
 use crate::session::{Session, Trial};
+use rigtwin_diagnose::{Analysis, Baseline, Candidate as _, DiscrepancyError, Folds};
 
 /// Colours of the measured x and y channels.
 const MEASURED_RGB: [[u8; 3]; 2] = [[200, 50, 30], [30, 80, 200]];
@@ -89,7 +89,7 @@ fn log_prefixed(
 /// `simulated/`, trial by trial on the same span (trials end to end in manifest order, each
 /// as long as the longer of the two tables), with an event naming the trial at its start.
 ///
-/// `simulated` pairs with the session's trials in order (as [`crate::discrepancy::compare`]
+/// `simulated` pairs with the session's trials in order (as [`crate::compare::compare`]
 /// keeps them); trials without a replay are not logged.
 pub fn log_replay_overlay(
     viewer: &mut Viewer,

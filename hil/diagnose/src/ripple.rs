@@ -191,8 +191,8 @@ impl Candidate for ForceRipple {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
-    use crate::discrepancy::candidate::tests::simulate_carts;
-    use crate::session::{Trial, TrialEntry};
+    use crate::candidate::tests::simulate_carts;
+    use rigtwin_session::{Trial, TrialEntry};
 
     const TICK_S: f64 = 2.5e-4;
     const MASS_KG: [f64; 2] = [12.0, 4.0];

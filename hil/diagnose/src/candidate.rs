@@ -501,11 +501,11 @@ pub(super) mod tests {
     use std::f64::consts::TAU;
 
     use super::*;
-    use crate::discrepancy::delay::ActuationDelay;
-    use crate::discrepancy::ripple::ForceRipple;
-    use crate::discrepancy::rotation::SensorRotation;
-    use crate::session::{Trial, TrialEntry, TrialKind};
+    use crate::delay::ActuationDelay;
+    use crate::ripple::ForceRipple;
+    use crate::rotation::SensorRotation;
     use rigtwin_device::signal::{EdgeMode, savgol_filter};
+    use rigtwin_session::{Trial, TrialEntry, TrialKind};
 
     const TICK_S: f64 = 2.5e-4;
     const MASS_KG: [f64; 2] = [12.0, 4.0];
@@ -515,7 +515,7 @@ pub(super) mod tests {
     /// command and the total force on the carts (motor as it acts, hand and plant
     /// effects) at tick `k` from the state at its start. Logged at 1 kHz as 4-tick
     /// block means, like the rigs.
-    pub(in crate::discrepancy) fn simulate_carts(
+    pub(crate) fn simulate_carts(
         ticks: usize,
         mut tick: impl FnMut(usize, [f64; 2], [f64; 2]) -> [[f64; 2]; 3],
     ) -> (TrialEntry, Trial) {
@@ -542,7 +542,7 @@ pub(super) mod tests {
 
     /// A trial of 1 kHz rows `[x, y, fx, fy, cmd_fx, cmd_fy]` (m, N), reach kind, no
     /// perturbation and no optional column but the command.
-    pub(in crate::discrepancy) fn logged_trial(rows: &[[f64; 6]]) -> (TrialEntry, Trial) {
+    pub(crate) fn logged_trial(rows: &[[f64; 6]]) -> (TrialEntry, Trial) {
         let col = |c: usize| rows.iter().map(|r| r[c]).collect::<Vec<f64>>();
         let n = rows.len();
         let trial = Trial {
@@ -650,7 +650,7 @@ pub(super) mod tests {
         assert!(e_old > 100.0 * e_true, "former {e_old} vs now {e_true}");
     }
 
-    pub(in crate::discrepancy) fn assert_same_gram(a: &Gram, b: &Gram) {
+    pub(crate) fn assert_same_gram(a: &Gram, b: &Gram) {
         let close = |x: f64, y: f64, what: &str| {
             assert!(
                 (x - y).abs() <= 1e-9 * (1.0 + x.abs().max(y.abs())),

@@ -61,8 +61,8 @@ use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
 use super::stats::{jackknife_se, mean_sd, student_t_critical};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
-use crate::session::{Axes, Session};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
+use rigtwin_session::{Axes, Session};
 
 /// Catalog effects judged from the hand balance (the response to the force pulses).
 pub const HUMAN_SIDE: [&str; 3] = ["stretch-reflex", "grip-compliance", "handle-mass"];

@@ -32,7 +32,7 @@
 use super::candidate::Candidate;
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
-use crate::session::Session;
+use rigtwin_session::Session;
 
 /// The force a lab's rig resolves over a session, N: the realistic force-sensor noise
 /// is 0.05–0.15 N RMS per sample and the tare error up to 0.3 N

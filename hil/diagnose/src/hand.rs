@@ -87,7 +87,7 @@ use super::gram::Gram;
 use super::hand_signals::{
     HandArm, HandData, HandResponse, OddUnits, average_by_angle, hand_responses, lagged, odd_parts,
 };
-use crate::session::{Axes, Session};
+use rigtwin_session::{Axes, Session};
 
 /// Feedback delays the baseline searches, ms: the arm's default (000_*'s δ_s), which
 /// the drawn subjects keep. A grid of 30–120 ms was tried: on generated sessions it

@@ -1,5 +1,7 @@
-//! The discrepancy workflow: what the simulation gets wrong about a measured session,
-//! which physical cause explains it, and how much the extended model gains.
+//! The diagnosis of a measured session: what the nominal model of rig and subject gets
+//! wrong about it, which physical cause explains it, and how much the extended model gains,
+//! judged on the recorded signals alone (nothing here re-simulates the session; `rigtwin
+//! compare` in the `rigtwin` crate does, and uses this crate's model and bands).
 //!
 //! | file | idea |
 //! |---|---|
@@ -17,9 +19,7 @@
 //! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
 //! | `model.rs` | the extended model as TOML (`--write-model`) |
 //! | `plots.rs` | the PNG figures of `diagnosis.md` |
-//! | `replay.rs` | `compare`: the session replayed in simulation, error per channel and phase, D and K measured vs simulated |
-//! | `subject_fit.rs` | the baseline subject (stiffness, co-contraction, feedback gain, reach timing) fitted to a session |
-//! | `bands.rs` | frequency content of the discrepancy: Welch band powers per channel |
+//! | `bands.rs` | frequency content of a discrepancy: Welch band powers per channel |
 //! | `report.rs` | the table a person reads and `diagnosis.md` |
 
 mod bands;
@@ -36,16 +36,14 @@ mod hand_signals;
 mod joint;
 mod model;
 pub mod plots;
-mod replay;
 mod report;
 mod ripple;
 mod rotation;
 mod signals;
 pub mod stats;
-mod subject_fit;
 pub mod unexplained;
 
-pub use bands::{BANDS_HZ, BandError, SEGMENT_S, band_errors};
+pub use bands::{BANDS_HZ, BandError, CHANNELS, SEGMENT_S, band_errors, channels_of};
 pub use candidate::{
     Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, Reshape, force_gains, gain_bounds,
     masses, nominal_target, push_rows, residual_rows,
@@ -69,18 +67,11 @@ pub use hand_signals::{
 };
 pub use joint::{Joint, Member, MemberParameters};
 pub use model::ExtendedModel;
-pub use replay::{
-    CHANNELS, ChannelError, CompareOptions, Comparison, ImpedanceComparison, RESPONSE_WINDOW_S,
-    Timing, compare,
-};
 pub use report::{convention, table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;
 pub use signals::{
     BalanceSignals, EVALUATION_RATE_HZ, REST_SPEED_M_PER_S, SMOOTHING_ORDER, SMOOTHING_WINDOW_S,
     window_for_rate,
-};
-pub use subject_fit::{
-    FitOptions, FitResidual, SubjectFit, fit_subject, fit_trials, travel_times_s,
 };
 pub use unexplained::{LIBRARY, Term};

@@ -29,7 +29,7 @@
 use rigtwin_device::signal::{EdgeMode, SignalError, savgol_coeffs, savgol_filter};
 
 use super::error::DiscrepancyError;
-use crate::session::{Axes, Trial, TrialEntry};
+use rigtwin_session::{Axes, Trial, TrialEntry};
 
 /// Length of the smoothing window, s. 41 ms with a cubic passes ~30 Hz: enough for the
 /// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz,

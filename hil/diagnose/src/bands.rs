@@ -11,8 +11,23 @@
 use rigtwin_device::signal::welch;
 use serde::Serialize;
 
-use super::replay::{CHANNELS, channels_of};
-use crate::session::Trial;
+use rigtwin_session::Trial;
+
+/// Channel names compared, in order (units in the names).
+pub const CHANNELS: [&str; 6] = ["x_m", "y_m", "fx_n", "fy_n", "cmd_fx_n", "cmd_fy_n"];
+
+/// The compared channels of a table, in [`CHANNELS`] order; a missing optional column is
+/// empty.
+pub fn channels_of(t: &Trial) -> [&[f64]; 6] {
+    [
+        &t.x_m,
+        &t.y_m,
+        &t.fx_n,
+        &t.fy_n,
+        t.cmd_fx_n.as_deref().unwrap_or(&[]),
+        t.cmd_fy_n.as_deref().unwrap_or(&[]),
+    ]
+}
 
 /// The bands reported, Hz: the reach itself (below 2 Hz), the corrections and the
 /// perturbation response (2–8 Hz), and the fast part of the response and noise (8–30 Hz,

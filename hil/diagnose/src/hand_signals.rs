@@ -42,7 +42,7 @@ use super::error::DiscrepancyError;
 use super::signals::{
     EVALUATION_RATE_HZ, SMOOTHING_ORDER, filter_force, trial_balance_filter, window_for_rate,
 };
-use crate::session::{Session, Trial, TrialEntry};
+use rigtwin_session::{Session, Trial, TrialEntry};
 
 /// Length of the response window after the onset, s. The 150 ms pulse plus 150 ms:
 /// the arm's delayed feedback (60 ms in the project's arm, up to ~120 ms in people)

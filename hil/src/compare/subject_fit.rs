@@ -37,11 +37,10 @@
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::error::DiscrepancyError;
-use super::replay::{
-    Acc, ChannelError, Timing, accumulate, channel_errors, length_factors, noise_free, onsets,
-    replay_trial,
-};
+use rigtwin_diagnose::DiscrepancyError;
+
+use super::errors::{Acc, ChannelError, accumulate, channel_errors};
+use super::resim::{Timing, length_factors, noise_free, onsets, replay_trial};
 use crate::protocol::Protocol;
 use crate::session::{Session, Trial, TrialEntry};
 
@@ -439,7 +438,7 @@ fn nelder_mead(
     (simplex[0].0, simplex[0].1, evals)
 }
 
-/// Fits the baseline subject of `protocol` (as `super::replay::session_protocol` makes
+/// Fits the baseline subject of `protocol` (as `super::resim::session_protocol` makes
 /// it) to `session`; see the module docs.
 ///
 /// # Errors

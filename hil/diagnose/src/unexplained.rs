@@ -220,10 +220,10 @@ mod tests {
     use std::sync::Arc;
 
     use super::*;
-    use crate::discrepancy::NUISANCE_COLUMNS;
-    use crate::discrepancy::candidate::tests::simulate_carts;
-    use crate::discrepancy::gram::Gram;
-    use crate::discrepancy::joint::Joint;
+    use crate::NUISANCE_COLUMNS;
+    use crate::candidate::tests::simulate_carts;
+    use crate::gram::Gram;
+    use crate::joint::Joint;
 
     const TICK_S: f64 = 2.5e-4;
     const SPRING_N_PER_M: [f64; 2] = [40.0, 25.0];

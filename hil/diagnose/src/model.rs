@@ -3,7 +3,7 @@
 //! [`PlantEffects`] keys (so the same table configures `rigtwin_world::RigConfig::effects`;
 //! `handle_mass` and `grip_compliance` live there too) and, for `stretch-reflex`, the
 //! arm's own [`StretchReflex`] keys. [`ExtendedModel::apply_to`] puts both into a
-//! protocol.
+//! plant's effects and a subject's reflex (a protocol's, in the `rigtwin` crate).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -17,7 +17,6 @@ use serde::{Deserialize, Serialize};
 
 use super::diagnose::Diagnosis;
 use super::error::DiscrepancyError;
-use crate::protocol::Protocol;
 
 /// A model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -167,13 +166,14 @@ impl ExtendedModel {
         }
     }
 
-    /// Puts the model into a protocol: its plant effects replace the protocol's, and a
-    /// fitted stretch reflex replaces the subjects' (the effects the model does not
-    /// name are the nominal ones, off).
-    pub fn apply_to(&self, protocol: &mut Protocol) {
-        protocol.plant.effects = self.effects.clone();
+    /// Puts the model into a plant and a subject: its plant effects replace `effects`,
+    /// and a fitted stretch reflex replaces `stretch_reflex` (the effects the model does
+    /// not name are the nominal ones, off; a subject's reflex stays when the model has
+    /// none).
+    pub fn apply_to(&self, effects: &mut PlantEffects, stretch_reflex: &mut Option<StretchReflex>) {
+        *effects = self.effects.clone();
         if self.stretch_reflex.is_some() {
-            protocol.subjects.arm.stretch_reflex = self.stretch_reflex;
+            *stretch_reflex = self.stretch_reflex;
         }
     }
 

@@ -229,11 +229,11 @@ mod tests {
     use std::f64::consts::TAU;
 
     use super::*;
-    use crate::discrepancy::candidate::tests::simulate_carts;
-    use crate::discrepancy::delay::ActuationDelay;
-    use crate::discrepancy::friction::RailFriction;
-    use crate::discrepancy::ripple::ForceRipple;
-    use crate::discrepancy::rotation::SensorRotation;
+    use crate::candidate::tests::simulate_carts;
+    use crate::delay::ActuationDelay;
+    use crate::friction::RailFriction;
+    use crate::ripple::ForceRipple;
+    use crate::rotation::SensorRotation;
 
     const TICK_S: f64 = 2.5e-4;
     const MASS_KG: [f64; 2] = [12.0, 4.0];
@@ -254,7 +254,7 @@ mod tests {
         seed: f64,
         angle_deg: f64,
         cog: bool,
-    ) -> (crate::session::TrialEntry, crate::session::Trial) {
+    ) -> (rigtwin_session::TrialEntry, rigtwin_session::Trial) {
         let (sn, cs) = angle_deg.to_radians().sin_cos();
         simulate_carts(16_000, |k, x, v| {
             let t = k as f64 * TICK_S;
@@ -383,7 +383,7 @@ mod tests {
             let fast = joint.grams(sig, 1e-4).unwrap();
             for s in settings {
                 let slow = joint.design(sig, s, 1e-4).unwrap().gram(sig);
-                crate::discrepancy::candidate::tests::assert_same_gram(&fast[s], &slow);
+                crate::candidate::tests::assert_same_gram(&fast[s], &slow);
             }
         }
     }
