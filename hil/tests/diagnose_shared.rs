@@ -96,9 +96,9 @@ fn example_rotation_mass_names_both_effects_with_their_sizes() {
     let Some(d) = diagnosis_of("example-rotation-mass") else {
         return;
     };
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
     assert_eq!(names.len(), 2, "{names:?}");
-    let by = |n: &str| d.causes.iter().find(|c| c.name == n).unwrap();
+    let by = |n: &str| d.causes.iter().find(|c| c.name.name() == n).unwrap();
     let angle = by("sensor-rotation").parameters["angle_deg"];
     assert!((angle - 6.313).abs() < 1.0, "angle {angle}");
     let mass = by("handle-mass").parameters["extra_mass_kg"];
@@ -123,13 +123,13 @@ fn without_the_command_the_plant_side_is_not_judged_and_the_hand_side_still_is()
         t.cmd_fy_n = None;
     }
     let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
-    let not: Vec<&str> = d.not_judged.iter().map(|n| n.effect.as_str()).collect();
+    let not: Vec<rigtwin_diagnose::EffectKind> = d.not_judged.iter().map(|n| n.effect).collect();
     assert_eq!(not, rigtwin_diagnose::PLANT_SIDE);
     for n in &d.not_judged {
         assert!(n.reason.contains("cmd_fx_n"), "{}", n.reason);
     }
     assert_eq!(d.trials_used, 0);
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
     assert_eq!(names, ["handle-mass"]);
     let mass = d.causes[0].parameters["extra_mass_kg"];
     assert!((mass - 0.781).abs() < 0.2 * 0.781, "mass {mass}");

@@ -130,7 +130,8 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
     // The written model carries every cause, the cogging on x alone, and the masses
     // fitted with the causes (none on the absent y axis).
     let m = rigtwin_diagnose::ExtendedModel::read(&model_file).unwrap();
-    assert_eq!(m.causes, names, "{m:?}");
+    let model_names: Vec<&str> = m.causes.iter().map(|k| k.name()).collect();
+    assert_eq!(model_names, names, "{m:?}");
     let ripple = m.effects.force_ripple.expect("the cogging is in the model");
     within("model cogging", ripple.amplitude_n[0], 0.8, 0.10);
     assert!(ripple.amplitude_n[1] == 0.0, "{ripple:?}");

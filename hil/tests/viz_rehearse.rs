@@ -403,7 +403,7 @@ fn rehearse_with_a_model_adds_its_rail_friction_to_the_motor_commands() {
     let model = ExtendedModel {
         fitted_to: "test".to_owned(),
         cause: "rail-friction".to_owned(),
-        causes: vec!["rail-friction".to_owned()],
+        causes: vec![rigtwin_diagnose::EffectKind::RailFriction],
         gain: 0.9,
         moving_mass_x_kg: 12.35,
         moving_mass_y_kg: 4.35,

@@ -26,23 +26,24 @@ use rigtwin::protocol::nuisance::NuisanceConfig;
 use rigtwin::rehearse::{self, Options};
 use rigtwin_arm::params::StretchReflex;
 use rigtwin_device::config::ForcePulseConfig;
+use rigtwin_diagnose::EffectKind;
 use rigtwin_world::PlantEffects;
 use rigtwin_world::config::{
     ActuationDelay, CableSpring, ForceRipple, GripCompliance, HandleMass, RailFriction,
     SensorEffect,
 };
 
-/// The effects a generated session may hide (`none` hides nothing).
-pub const EFFECTS: [&str; 8] = [
-    "none",
-    "rail-friction",
-    "force-ripple",
-    "actuation-delay",
-    "sensor-rotation",
-    "stretch-reflex",
-    "grip-compliance",
-    "handle-mass",
-];
+/// The effects a generated session may hide: `none` (nothing), then the diagnosis's
+/// whole catalog, by its names.
+pub const EFFECTS: [&str; EffectKind::ALL.len() + 1] = {
+    let mut out = ["none"; EffectKind::ALL.len() + 1];
+    let mut i = 0;
+    while i < EffectKind::ALL.len() {
+        out[i + 1] = EffectKind::ALL[i].name();
+        i += 1;
+    }
+    out
+};
 
 /// The 4 kHz control tick, s (the world rounds delays to whole ticks).
 const TICK_S: f64 = 2.5e-4;
@@ -153,69 +154,79 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
     let mut effects = PlantEffects::default();
     let mut stretch_reflex = None;
     let mut p = BTreeMap::new();
-    match effect {
-        "none" => {}
-        "rail-friction" => {
-            let f = RailFriction {
-                coulomb_n: rng.random_range(1.0..4.0),
-                viscous_n_s_per_m: rng.random_range(2.0..10.0),
-                smooth_velocity_m_per_s: rng.random_range(0.5e-3..2e-3),
-            };
-            p.insert("coulomb_n".into(), f.coulomb_n);
-            p.insert("viscous_n_s_per_m".into(), f.viscous_n_s_per_m);
-            effects.rail_friction = Some(f);
-        }
-        "force-ripple" => {
-            let r = ForceRipple {
-                amplitude_n: [rng.random_range(1.0..3.0), rng.random_range(1.0..3.0)],
-                pitch_m: rng.random_range(0.01..0.05),
-                phase_rad: [
-                    rng.random_range(0.0..std::f64::consts::TAU),
-                    rng.random_range(0.0..std::f64::consts::TAU),
-                ],
-            };
-            p.insert("amplitude_x_n".into(), r.amplitude_n[0]);
-            p.insert("amplitude_y_n".into(), r.amplitude_n[1]);
-            p.insert("pitch_m".into(), r.pitch_m);
-            effects.force_ripple = Some(r);
-        }
-        "actuation-delay" => {
-            let ticks = (rng.random_range(0.75e-3..1.5e-3) / TICK_S).round();
-            let d = ActuationDelay {
-                delay_ms: ticks * TICK_S * 1e3,
-            };
-            p.insert("delay_ms".into(), d.delay_ms);
-            effects.actuation_delay = Some(d);
-        }
-        "sensor-rotation" => {
-            let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
-            let s = SensorEffect {
-                rotation_deg: sign * rng.random_range(10.0..25.0),
-                offset_n: [0.0; 2],
-                lowpass_hz: 0.0,
-            };
-            p.insert("angle_deg".into(), s.rotation_deg);
-            effects.sensor = Some(s);
-        }
-        "stretch-reflex" => {
-            let r = StretchReflex {
-                delay_ms: rng.random_range(15.0_f64..35.0).round(),
-                gain_n_s_per_m: rng.random_range(100.0..250.0),
-            };
-            p.insert("delay_ms".into(), r.delay_ms);
-            p.insert("gain".into(), r.gain_n_s_per_m);
-            stretch_reflex = Some(r);
-        }
-        "grip-compliance" => {
-            let k = rng.random_range(2000.0..6000.0);
-            let g = GripCompliance {
-                stiffness_n_per_m: k,
-                damping_n_s_per_m: k * rng.random_range(2e-3..6e-3),
-            };
-            p.insert("stiffness_n_per_m".into(), g.stiffness_n_per_m);
-            effects.grip_compliance = Some(g);
-        }
-        "cable-spring" => {
+    match (effect, EffectKind::from_name(effect)) {
+        ("none", _) => {}
+        // Every catalog effect has its draw: a new one does not compile until it has.
+        (_, Some(kind)) => match kind {
+            EffectKind::RailFriction => {
+                let f = RailFriction {
+                    coulomb_n: rng.random_range(1.0..4.0),
+                    viscous_n_s_per_m: rng.random_range(2.0..10.0),
+                    smooth_velocity_m_per_s: rng.random_range(0.5e-3..2e-3),
+                };
+                p.insert("coulomb_n".into(), f.coulomb_n);
+                p.insert("viscous_n_s_per_m".into(), f.viscous_n_s_per_m);
+                effects.rail_friction = Some(f);
+            }
+            EffectKind::ForceRipple => {
+                let r = ForceRipple {
+                    amplitude_n: [rng.random_range(1.0..3.0), rng.random_range(1.0..3.0)],
+                    pitch_m: rng.random_range(0.01..0.05),
+                    phase_rad: [
+                        rng.random_range(0.0..std::f64::consts::TAU),
+                        rng.random_range(0.0..std::f64::consts::TAU),
+                    ],
+                };
+                p.insert("amplitude_x_n".into(), r.amplitude_n[0]);
+                p.insert("amplitude_y_n".into(), r.amplitude_n[1]);
+                p.insert("pitch_m".into(), r.pitch_m);
+                effects.force_ripple = Some(r);
+            }
+            EffectKind::ActuationDelay => {
+                let ticks = (rng.random_range(0.75e-3..1.5e-3) / TICK_S).round();
+                let d = ActuationDelay {
+                    delay_ms: ticks * TICK_S * 1e3,
+                };
+                p.insert("delay_ms".into(), d.delay_ms);
+                effects.actuation_delay = Some(d);
+            }
+            EffectKind::SensorRotation => {
+                let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                let s = SensorEffect {
+                    rotation_deg: sign * rng.random_range(10.0..25.0),
+                    offset_n: [0.0; 2],
+                    lowpass_hz: 0.0,
+                };
+                p.insert("angle_deg".into(), s.rotation_deg);
+                effects.sensor = Some(s);
+            }
+            EffectKind::StretchReflex => {
+                let r = StretchReflex {
+                    delay_ms: rng.random_range(15.0_f64..35.0).round(),
+                    gain_n_s_per_m: rng.random_range(100.0..250.0),
+                };
+                p.insert("delay_ms".into(), r.delay_ms);
+                p.insert("gain".into(), r.gain_n_s_per_m);
+                stretch_reflex = Some(r);
+            }
+            EffectKind::GripCompliance => {
+                let k = rng.random_range(2000.0..6000.0);
+                let g = GripCompliance {
+                    stiffness_n_per_m: k,
+                    damping_n_s_per_m: k * rng.random_range(2e-3..6e-3),
+                };
+                p.insert("stiffness_n_per_m".into(), g.stiffness_n_per_m);
+                effects.grip_compliance = Some(g);
+            }
+            EffectKind::HandleMass => {
+                let h = HandleMass {
+                    extra_mass_kg: rng.random_range(0.3..1.0),
+                };
+                p.insert("extra_mass_kg".into(), h.extra_mass_kg);
+                effects.handle_mass = Some(h);
+            }
+        },
+        ("cable-spring", None) => {
             let c = CableSpring {
                 stiffness_n_per_m: [rng.random_range(20.0..60.0), rng.random_range(20.0..60.0)],
                 rest_m: [rng.random_range(-0.05..0.05), rng.random_range(-0.05..0.05)],
@@ -224,7 +235,7 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
             p.insert("stiffness_y_n_per_m".into(), c.stiffness_n_per_m[1]);
             effects.cable_spring = Some(c);
         }
-        "sensor-lowpass" => {
+        ("sensor-lowpass", None) => {
             let s = SensorEffect {
                 rotation_deg: 0.0,
                 offset_n: [0.0; 2],
@@ -232,13 +243,6 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
             };
             p.insert("lowpass_hz".into(), s.lowpass_hz);
             effects.sensor = Some(s);
-        }
-        "handle-mass" => {
-            let h = HandleMass {
-                extra_mass_kg: rng.random_range(0.3..1.0),
-            };
-            p.insert("extra_mass_kg".into(), h.extra_mass_kg);
-            effects.handle_mass = Some(h);
         }
         _ => return None,
     }

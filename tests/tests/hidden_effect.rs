@@ -356,17 +356,20 @@ fn more_pulses_lower_the_hand_noise_floor() {
 /// were named, and whether each one's parameters are within 20 % of the hidden ones.
 fn judge_pair(g: &Generated, d: &Diagnosis) -> (bool, bool) {
     let mut hidden: Vec<&str> = g.hidden.each.iter().map(|(n, _)| n.as_str()).collect();
-    let mut named: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    let mut named: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
     hidden.sort_unstable();
     named.sort_unstable();
     let within = g.hidden.each.iter().all(|(name, params)| {
-        d.causes.iter().find(|c| c.name == *name).is_some_and(|c| {
-            params.iter().all(|(k, t)| {
-                c.parameters
-                    .get(k)
-                    .is_some_and(|v| (v - t).abs() <= 0.2 * t.abs())
+        d.causes
+            .iter()
+            .find(|c| c.name.name() == *name)
+            .is_some_and(|c| {
+                params.iter().all(|(k, t)| {
+                    c.parameters
+                        .get(k)
+                        .is_some_and(|v| (v - t).abs() <= 0.2 * t.abs())
+                })
             })
-        })
     });
     (hidden == named, within)
 }

@@ -26,7 +26,7 @@ fn param(d: &Diagnosis, cause: &str, key: &str) -> f64 {
     let c = d
         .causes
         .iter()
-        .find(|c| c.name == cause)
+        .find(|c| c.name.name() == cause)
         .unwrap_or_else(|| panic!("{cause} not named: {:?}", d.causes));
     c.parameters[key]
 }
@@ -50,7 +50,7 @@ fn close(what: &str, got: f64, want: f64, rel: f64) {
 fn a_bench_servo_axis_is_identified_on_one_axis() {
     let axis = ServoAxis::bench();
     let d = diagnosed(&axis, 7);
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
     assert_eq!(
         names,
         ["rail-friction", "force-ripple", "actuation-delay"],
@@ -99,7 +99,7 @@ fn a_bench_servo_axis_is_identified_on_one_axis() {
     );
     for human in ["stretch-reflex", "grip-compliance", "handle-mass"] {
         assert!(
-            d.not_judged.iter().any(|n| n.effect == human),
+            d.not_judged.iter().any(|n| n.effect.name() == human),
             "{human} must be reported as not judged: {:?}",
             d.not_judged
         );
@@ -115,7 +115,7 @@ fn a_servo_axis_with_friction_alone_names_friction_alone() {
     axis.cogging_n = 0.0;
     axis.delay_ticks = 0;
     let d = diagnosed(&axis, 11);
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.as_str()).collect();
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
     assert_eq!(names, ["rail-friction"], "{d:#?}");
     close("mass", d.model["moving_mass_x_kg"], axis.mass_kg, 0.02);
     close(

@@ -47,6 +47,7 @@
 use super::error::DiscrepancyError;
 use super::gram::{Gram, Intercepts};
 use super::signals::BalanceSignals;
+use crate::effect::EffectKind;
 
 /// A candidate plant effect: a family of linear least-squares problems, one per
 /// setting of its nonlinear parameter (pitch, delay, angle, smoothing velocity).
@@ -58,6 +59,10 @@ use super::signals::BalanceSignals;
 pub trait Candidate: Designed + Sync + Send {
     /// Catalog name (`rail-friction`, ...).
     fn name(&self) -> &'static str;
+    /// The catalog effect it is (`None` for the baseline and the library's terms).
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     /// Number of settings of the nonlinear parameter.
     fn settings(&self) -> usize;
     /// The nonlinear parameter's name (with unit) and its value at setting `s`.

@@ -30,6 +30,7 @@
 //! trend fails it (the bins are flat where the sine swings).
 
 use super::candidate::Candidate;
+use super::effect::EffectKind;
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
 use rigtwin_session::Session;
@@ -111,19 +112,23 @@ fn p(params: &std::collections::BTreeMap<String, f64>, k: &str) -> f64 {
     params.get(k).copied().unwrap_or(f64::NAN)
 }
 
-/// Why the fitted parameters of `name` are not a finding (empty when they are), by the
-/// module's table; `latency_ms` is the nominal latency.
+/// Why the fitted parameters of the catalog effect `kind` are not a finding (empty when
+/// they are, and for what is not in the catalog), by the module's table; `latency_ms` is
+/// the nominal latency.
 #[must_use]
 pub fn immaterial(
-    name: &str,
+    kind: Option<EffectKind>,
     params: &std::collections::BTreeMap<String, f64>,
     scale: &SessionScale,
     latency_ms: f64,
 ) -> Vec<String> {
     let r = FORCE_RESOLUTION_N;
     let mut why = Vec::new();
-    match name {
-        "rail-friction" => {
+    let Some(kind) = kind else {
+        return why;
+    };
+    match kind {
+        EffectKind::RailFriction => {
             let (fc, b) = (p(params, "coulomb_n"), p(params, "viscous_n_s_per_m"));
             if fc < -0.05 || b < -0.5 {
                 why.push(format!(
@@ -138,7 +143,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "force-ripple" => {
+        EffectKind::ForceRipple => {
             let (ax, ay) = (p(params, "amplitude_x_n"), p(params, "amplitude_y_n"));
             if ax.max(ay).is_nan() || ax.max(ay) < r {
                 why.push(format!(
@@ -146,7 +151,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "sensor-rotation" => {
+        EffectKind::SensorRotation => {
             let th = p(params, "angle_deg");
             let f = th.to_radians().sin().abs() * scale.f_max;
             if th.abs() < 0.5 || f < r {
@@ -156,7 +161,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "actuation-delay" => {
+        EffectKind::ActuationDelay => {
             let d = p(params, "delay_ms");
             if d - latency_ms < 0.25 - 1e-9 {
                 why.push(format!(
@@ -164,7 +169,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "handle-mass" => {
+        EffectKind::HandleMass => {
             let m = p(params, "extra_mass_kg");
             let f = m * scale.a_max;
             if f < r {
@@ -174,7 +179,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "grip-compliance" => {
+        EffectKind::GripCompliance => {
             let k = p(params, "stiffness_n_per_m");
             let stretch = scale.f_max / k;
             if stretch < 0.25e-3 {
@@ -185,7 +190,7 @@ pub fn immaterial(
                 ));
             }
         }
-        "stretch-reflex" => {
+        EffectKind::StretchReflex => {
             let g = p(params, "gain");
             if g < 25.0 {
                 why.push(format!(
@@ -193,7 +198,6 @@ pub fn immaterial(
                 ));
             }
         }
-        _ => {}
     }
     why
 }
@@ -201,11 +205,22 @@ pub fn immaterial(
 /// Why setting `s` of a candidate with `settings` settings is at the edge of its search
 /// range (empty when it is not).
 #[must_use]
-pub fn at_edge(name: &str, setting: (&str, f64), s: usize, settings: usize) -> Vec<String> {
+pub fn at_edge(
+    kind: Option<EffectKind>,
+    setting: (&str, f64),
+    s: usize,
+    settings: usize,
+) -> Vec<String> {
     if settings < 2 {
         return Vec::new();
     }
-    let first = s == 0 && name != "rail-friction" && name != "actuation-delay";
+    // A friction knee at its sharpest setting is the sign-function limit of the law, and
+    // a delay's first setting is no lag beyond the nominal latency: neither is an edge.
+    let open_below = matches!(
+        kind,
+        Some(EffectKind::RailFriction | EffectKind::ActuationDelay)
+    );
+    let first = s == 0 && !open_below;
     let last = s + 1 == settings;
     if first || last {
         vec![format!(
@@ -232,10 +247,17 @@ pub fn evidence_r2(
     signals: &[BalanceSignals],
     latency_s: f64,
 ) -> Result<Option<f64>, DiscrepancyError> {
-    let by_velocity = match c.name() {
-        "rail-friction" => true,
-        "force-ripple" => false,
-        _ => return Ok(None),
+    let by_velocity = match c.kind() {
+        Some(EffectKind::RailFriction) => true,
+        Some(EffectKind::ForceRipple) => false,
+        Some(
+            EffectKind::ActuationDelay
+            | EffectKind::SensorRotation
+            | EffectKind::StretchReflex
+            | EffectKind::GripCompliance
+            | EffectKind::HandleMass,
+        )
+        | None => return Ok(None),
     };
     // Coordinate, partial residual and law at every evaluated row.
     let mut pts: Vec<(f64, f64, f64)> = Vec::new();

@@ -17,6 +17,7 @@
 use super::candidate::{Candidate, Design, Designed, Reshape};
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
+use crate::effect::EffectKind;
 
 /// Largest latency a nominal rig may have, s: one 4 kHz tick — the command computed at
 /// tick k acts from tick k + 1 at the latest. The 2 kHz zero-order hold adds nothing:
@@ -75,7 +76,10 @@ impl Designed for ActuationDelay {
 
 impl Candidate for ActuationDelay {
     fn name(&self) -> &'static str {
-        "actuation-delay"
+        EffectKind::ActuationDelay.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::ActuationDelay)
     }
     fn settings(&self) -> usize {
         (self.max_s / self.step_s).round() as usize + 1

@@ -51,6 +51,7 @@ use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial,
 };
 use super::delay::ActuationDelay;
+use super::effect::{Effect, EffectKind};
 use super::error::DiscrepancyError;
 use super::friction::RailFriction;
 use super::gram::Gram;
@@ -65,14 +66,18 @@ use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
 use rigtwin_session::{Axes, Session};
 
 /// Catalog effects judged from the hand balance (the response to the force pulses).
-pub const HUMAN_SIDE: [&str; 3] = ["stretch-reflex", "grip-compliance", "handle-mass"];
+pub const HUMAN_SIDE: [EffectKind; 3] = [
+    EffectKind::StretchReflex,
+    EffectKind::GripCompliance,
+    EffectKind::HandleMass,
+];
 
 /// Catalog effects judged from the cart force balance.
-pub const PLANT_SIDE: [&str; 4] = [
-    "rail-friction",
-    "force-ripple",
-    "actuation-delay",
-    "sensor-rotation",
+pub const PLANT_SIDE: [EffectKind; 4] = [
+    EffectKind::RailFriction,
+    EffectKind::ForceRipple,
+    EffectKind::ActuationDelay,
+    EffectKind::SensorRotation,
 ];
 
 /// Options of [`diagnose`].
@@ -101,8 +106,11 @@ impl Default for DiagnoseOptions {
 /// One candidate's judgement.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Ranked {
-    /// Catalog name.
+    /// Catalog name (or the library term's, [`super::unexplained::Term`]).
     pub name: String,
+    /// The catalog effect (`None` for a library term).
+    #[serde(skip)]
+    pub kind: Option<EffectKind>,
     /// The balance it was judged on: `cart` (plant side) or `hand` (human side).
     pub balance: String,
     /// Held-out gain `1 − extended/baseline` NRMSE.
@@ -158,8 +166,8 @@ pub struct Threshold {
 /// An effect that could not be judged, and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NotJudged {
-    /// Catalog name.
-    pub effect: String,
+    /// The effect (its catalog name in the JSON).
+    pub effect: EffectKind,
     /// Why.
     pub reason: String,
 }
@@ -167,8 +175,12 @@ pub struct NotJudged {
 /// One named cause.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Cause {
-    /// Catalog name.
-    pub name: String,
+    /// The effect (its catalog name in the JSON).
+    pub name: EffectKind,
+    /// The effect with its parameters, in the types that simulate it (what
+    /// `--write-model` writes; the JSON has them as [`Self::parameters`]).
+    #[serde(skip)]
+    pub effect: Effect,
     /// The balance it was judged on (`cart` or `hand`).
     pub balance: String,
     /// Held-out gain against that balance's baseline.
@@ -402,15 +414,30 @@ fn params_with_se(
 }
 
 impl Cause {
-    fn of(r: &Ranked) -> Cause {
-        Cause {
+    /// The cause a passing candidate's row names.
+    ///
+    /// # Errors
+    /// [`DiscrepancyError::NotAnEffect`] when the row is not a catalog effect's, or its
+    /// parameters do not describe one.
+    fn of(r: &Ranked) -> Result<Cause, DiscrepancyError> {
+        let not = |why: String| DiscrepancyError::NotAnEffect {
             name: r.name.clone(),
+            why,
+        };
+        let kind = r
+            .kind
+            .ok_or_else(|| not("not in the catalog".to_string()))?;
+        let effect =
+            Effect::from_parameters(kind, &r.parameters).map_err(|e| not(e.to_string()))?;
+        Ok(Cause {
+            name: kind,
+            effect,
             balance: r.balance.clone(),
             gain: r.gain,
             parameters: r.parameters.clone(),
             parameter_se: r.parameter_se.clone(),
             given: r.given.clone(),
-        }
+        })
     }
 }
 
@@ -448,8 +475,8 @@ impl Judge<'_> {
         let (parameters, parameter_se) =
             params_with_se(c.parameters(fit.setting, &fit.beta, lat), &fold_params);
         let s = fit.setting;
-        let mut rejected = immaterial(c.name(), &parameters, self.scale, lat * 1e3);
-        rejected.extend(at_edge(c.name(), c.setting(s), s, c.settings()));
+        let mut rejected = immaterial(c.kind(), &parameters, self.scale, lat * 1e3);
+        rejected.extend(at_edge(c.kind(), c.setting(s), s, c.settings()));
         let mut significant = t > self.t_critical && gain >= self.min_gain;
         let mut r2 = None;
         if significant {
@@ -465,6 +492,7 @@ impl Judge<'_> {
         significant &= rejected.is_empty();
         Ok(Ranked {
             name: c.name().to_string(),
+            kind: c.kind(),
             balance: "cart".into(),
             gain,
             extended_nrmse: nrmse,
@@ -501,7 +529,7 @@ fn forward_select(
     };
     let mut nrmse = first.extended_nrmse;
     let lat = judge.latency_s;
-    let mut causes = vec![Cause::of(first)];
+    let mut causes = vec![Cause::of(first)?];
     let mut chosen: Vec<Member> = vec![(cf.candidate.clone(), cf.fit.setting)];
     let mut conditional = Vec::new();
     loop {
@@ -566,7 +594,7 @@ fn forward_select(
             let fp: Vec<Vec<(String, f64)>> = per_fold.iter().map(|m| m[i].1.clone()).collect();
             (cause.parameters, cause.parameter_se) = params_with_se(params, &fp);
         }
-        causes.push(Cause::of(&r));
+        causes.push(Cause::of(&r)?);
         nrmse = r.extended_nrmse;
         chosen = joint.fixed.clone();
         chosen.push((joint.next.clone(), fit.setting));
@@ -1154,7 +1182,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             candidates.push(Arc::new(SensorRotation::default()));
         } else {
             not_judged.push(NotJudged {
-                effect: "sensor-rotation".to_string(),
+                effect: EffectKind::SensorRotation,
                 reason: "needs a handle force sensor on both axes".to_string(),
             });
         }
@@ -1191,7 +1219,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         let members: Vec<Member> = selection
             .members
             .iter()
-            .filter(|(c, _)| plant_named.iter().any(|k| k.name == c.name()))
+            .filter(|(c, _)| plant_named.iter().any(|k| Some(k.name) == c.kind()))
             .cloned()
             .collect();
         d.model = if members.is_empty() {
@@ -1213,7 +1241,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         );
         for e in PLANT_SIDE {
             not_judged.push(NotJudged {
-                effect: e.to_string(),
+                effect: e,
                 reason: reason.clone(),
             });
         }
@@ -1223,10 +1251,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     // The sensor reads the hand's force too: with a rotation named on the cart balance,
     // or a lag of the reading found there outside the catalog, the hand balance judges
     // the reading turned back and its lag undone.
-    let angle = plant_named
-        .iter()
-        .find(|c| c.name == "sensor-rotation")
-        .and_then(|c| c.parameters.get("angle_deg").copied());
+    let angle = plant_named.iter().find_map(|c| match c.effect {
+        Effect::SensorRotation(s) => Some(s.rotation_deg),
+        _ => None,
+    });
     let lag = d.unexplained.as_ref().and_then(|u| {
         u.terms
             .iter()
@@ -1301,7 +1329,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                     .collect();
                 let with_units = |mut p: Vec<(String, f64)>| {
                     // A reflex also in joint and endpoint units (from its gain).
-                    if c.name() == "stretch-reflex"
+                    if c.kind() == Some(EffectKind::StretchReflex)
                         && let Some(g) = p.iter().find(|(k, _)| k == "gain").map(|(_, g)| *g)
                     {
                         p.extend(h.reflex_units(g));
@@ -1318,15 +1346,16 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 if !c.physical(fit.setting, &fit.beta) {
                     rejected.push("unphysical: a negative mass or reflex gain".to_string());
                 }
-                rejected.extend(immaterial(c.name(), &parameters, &scale, 0.0));
+                rejected.extend(immaterial(c.kind(), &parameters, &scale, 0.0));
                 rejected.extend(at_edge(
-                    c.name(),
+                    c.kind(),
                     c.setting(fit.setting),
                     fit.setting,
                     c.settings(),
                 ));
                 hand_ranked.push(Ranked {
                     name: c.name().to_string(),
+                    kind: c.kind(),
                     balance: "hand".into(),
                     gain,
                     extended_nrmse: nrmse,
@@ -1346,7 +1375,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         Err(why) => {
             for e in HUMAN_SIDE {
                 not_judged.push(NotJudged {
-                    effect: e.to_string(),
+                    effect: e,
                     reason: why.clone(),
                 });
             }
@@ -1368,10 +1397,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         plant_ranked
             .iter()
             .map(|(r, _)| r)
-            .find(|r| r.name == c.name)
+            .find(|r| r.kind == Some(c.name))
     });
     let hand_first = hand_ranked.iter().find(|r| r.significant);
-    let hand_named: Vec<Cause> = hand_first.map(Cause::of).into_iter().collect();
+    let hand_named: Vec<Cause> = hand_first.map(Cause::of).transpose()?.into_iter().collect();
     let plant_leads = match (plant_first, hand_first) {
         (Some(p), Some(h)) => p.gain >= h.gain,
         (p, _) => p.is_some(),
@@ -1383,7 +1412,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     };
     let cause = if plant_leads { plant_first } else { hand_first }.cloned();
     if let (Some(r), Some(c)) = (&cause, d.causes.first()) {
-        d.cause = c.name.clone();
+        d.cause = c.name.name().to_string();
         d.parameters = c.parameters.clone();
         d.parameter_se = c.parameter_se.clone();
         if r.balance == "hand" {

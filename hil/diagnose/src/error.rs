@@ -79,6 +79,15 @@ pub enum DiscrepancyError {
         /// Why.
         reason: String,
     },
+    /// A row the decision names is not a catalog effect, or its fitted parameters do not
+    /// describe one (a candidate whose parameter names and its [`crate::Effect`] disagree).
+    #[error("{name} was to be named a cause, but {why}")]
+    NotAnEffect {
+        /// The row's name.
+        name: String,
+        /// Why it is not an effect.
+        why: String,
+    },
     /// A model file could not be made or read.
     #[error("model file {path}: {reason}")]
     Model {

@@ -6,6 +6,7 @@
 use super::candidate::{Candidate, Design, Designed};
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
+use crate::effect::EffectKind;
 
 /// Number of smoothing velocities tried: from nearly a sign function (0.2 mm/s) to a
 /// soft knee at 1 cm/s, which spans what rails and their models use, 20 to a decade
@@ -50,7 +51,10 @@ impl Designed for RailFriction {
 
 impl Candidate for RailFriction {
     fn name(&self) -> &'static str {
-        "rail-friction"
+        EffectKind::RailFriction.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::RailFriction)
     }
     fn settings(&self) -> usize {
         SMOOTH_VELOCITY_STEPS

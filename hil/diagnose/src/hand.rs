@@ -78,6 +78,7 @@
 //! The experiments behind these choices, with their numbers, are in the dated note
 //! `hil/docs/notes/2026-12-02-hand-balance.md`.
 
+use crate::effect::EffectKind;
 use nalgebra::{Matrix2, Vector2};
 use rayon::prelude::*;
 
@@ -246,6 +247,10 @@ pub fn visit_rows(
 pub trait HandCandidate: Sync + Send {
     /// Catalog name.
     fn name(&self) -> &'static str;
+    /// The catalog effect it is (`None` for the baseline and the feedback delay).
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     /// Settings of the nonlinear parameter.
     fn settings(&self) -> usize;
     /// The nonlinear parameter's name (with unit) and value at setting `s`.
@@ -643,7 +648,10 @@ pub struct HandleMass;
 
 impl HandCandidate for HandleMass {
     fn name(&self) -> &'static str {
-        "handle-mass"
+        EffectKind::HandleMass.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::HandleMass)
     }
     fn settings(&self) -> usize {
         1
@@ -686,7 +694,10 @@ fn reflex_delay_s(s: usize) -> f64 {
 
 impl HandCandidate for StretchReflex {
     fn name(&self) -> &'static str {
-        "stretch-reflex"
+        EffectKind::StretchReflex.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::StretchReflex)
     }
     fn settings(&self) -> usize {
         ((REFLEX_DELAY_MS.1 - REFLEX_DELAY_MS.0) / REFLEX_DELAY_MS.2).round() as usize + 1
@@ -736,7 +747,10 @@ fn grip_setting(s: usize) -> (f64, f64) {
 
 impl HandCandidate for GripCompliance {
     fn name(&self) -> &'static str {
-        "grip-compliance"
+        EffectKind::GripCompliance.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::GripCompliance)
     }
     fn settings(&self) -> usize {
         GRIP_STIFFNESS_N_PER_M.2 * GRIP_TIME_S.len()

@@ -191,6 +191,9 @@ impl Candidate for Joint {
     fn name(&self) -> &'static str {
         self.next.name()
     }
+    fn kind(&self) -> Option<crate::effect::EffectKind> {
+        self.next.kind()
+    }
     fn settings(&self) -> usize {
         self.next.settings()
     }

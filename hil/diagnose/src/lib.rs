@@ -5,6 +5,7 @@
 //!
 //! | file | idea |
 //! |---|---|
+//! | `effect.rs` | the catalog as types: [`EffectKind`] (names, sides) and [`Effect`] (parameters in the world's and the arm's types) |
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
@@ -28,6 +29,7 @@ mod crossval;
 pub mod decide;
 mod delay;
 mod diagnose;
+mod effect;
 mod error;
 mod friction;
 mod gram;
@@ -54,6 +56,7 @@ pub use diagnose::{
     Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, FoundTerm, HUMAN_SIDE, NotJudged,
     PLANT_SIDE, Ranked, Threshold, Unexplained, diagnose, nominal_parameters,
 };
+pub use effect::{Effect, EffectKind, MissingParameter, Side, UnknownEffect};
 pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITY_STEPS, smooth_velocity_m_per_s};
 pub use gram::{Gram, Intercepts};

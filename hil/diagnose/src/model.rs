@@ -5,17 +5,14 @@
 //! arm's own [`StretchReflex`] keys. [`ExtendedModel::apply_to`] puts both into a
 //! plant's effects and a subject's reflex (a protocol's, in the `rigtwin` crate).
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use rigtwin_arm::params::StretchReflex;
 use rigtwin_world::PlantEffects;
-use rigtwin_world::config::{
-    ActuationDelay, ForceRipple, GripCompliance, HandleMass, RailFriction, SensorEffect,
-};
 use serde::{Deserialize, Serialize};
 
 use super::diagnose::Diagnosis;
+use super::effect::EffectKind;
 use super::error::DiscrepancyError;
 
 /// A model file.
@@ -24,12 +21,12 @@ use super::error::DiscrepancyError;
 pub struct ExtendedModel {
     /// Session it was fitted to.
     pub fitted_to: String,
-    /// Catalog name of the strongest cause, or `none`.
+    /// Catalog name of the strongest cause, or `none` (checked on reading).
     pub cause: String,
     /// Every cause the model carries, strongest first (all of them are in `effects`
     /// and `stretch_reflex`).
     #[serde(default)]
-    pub causes: Vec<String>,
+    pub causes: Vec<EffectKind>,
     /// Held-out gain of the model over the nominal balance.
     pub gain: f64,
     /// Fitted moving mass of the x axis (both carts), kg, from the fit with the causes
@@ -45,93 +42,6 @@ pub struct ExtendedModel {
     pub stretch_reflex: Option<StretchReflex>,
 }
 
-fn get(p: &BTreeMap<String, f64>, k: &str) -> Option<f64> {
-    p.get(k).copied()
-}
-
-/// Adds the effect `name` with its fitted `p` to the world's effects (or the arm's
-/// reflex); an unknown name adds nothing.
-fn add_effect(
-    effects: &mut PlantEffects,
-    stretch_reflex: &mut Option<StretchReflex>,
-    name: &str,
-    p: &BTreeMap<String, f64>,
-) {
-    match name {
-        "rail-friction" => {
-            if let (Some(c), Some(b), Some(vs)) = (
-                get(p, "coulomb_n"),
-                get(p, "viscous_n_s_per_m"),
-                get(p, "smooth_velocity_m_per_s"),
-            ) {
-                effects.rail_friction = Some(RailFriction {
-                    coulomb_n: c.max(0.0),
-                    viscous_n_s_per_m: b.max(0.0),
-                    smooth_velocity_m_per_s: vs,
-                });
-            }
-        }
-        "force-ripple" => {
-            // Each axis has its own amplitude and phase; a rig of one axis has only its
-            // own, and the other axis has no ripple.
-            let axis = |a: &str| {
-                get(p, &format!("amplitude_{a}_n"))
-                    .map(|amp| (amp, get(p, &format!("phase_{a}_rad"))))
-            };
-            let (x, y) = (axis("x"), axis("y"));
-            if let (Some(pitch), true) = (get(p, "pitch_m"), x.is_some() || y.is_some()) {
-                let (ax, px) = x.map_or((0.0, 0.0), |(a, ph)| (a, ph.unwrap_or(0.0)));
-                let (ay, py) = y.map_or((0.0, 0.0), |(a, ph)| (a, ph.unwrap_or(0.0)));
-                effects.force_ripple = Some(ForceRipple {
-                    amplitude_n: [ax, ay],
-                    pitch_m: pitch,
-                    phase_rad: [px, py],
-                });
-            }
-        }
-        "actuation-delay" => {
-            if let Some(ms) = get(p, "delay_ms") {
-                effects.actuation_delay = Some(ActuationDelay {
-                    delay_ms: ms.max(0.0),
-                });
-            }
-        }
-        "sensor-rotation" => {
-            if let Some(deg) = get(p, "angle_deg") {
-                effects.sensor = Some(SensorEffect {
-                    rotation_deg: deg,
-                    offset_n: [0.0; 2],
-                    lowpass_hz: 0.0,
-                });
-            }
-        }
-        "handle-mass" => {
-            if let Some(kg) = get(p, "extra_mass_kg") {
-                effects.handle_mass = Some(HandleMass {
-                    extra_mass_kg: kg.max(0.0),
-                });
-            }
-        }
-        "grip-compliance" => {
-            if let Some(k) = get(p, "stiffness_n_per_m") {
-                effects.grip_compliance = Some(GripCompliance {
-                    stiffness_n_per_m: k,
-                    damping_n_s_per_m: get(p, "damping_n_s_per_m").unwrap_or(0.0).max(0.0),
-                });
-            }
-        }
-        "stretch-reflex" => {
-            if let (Some(ms), Some(g)) = (get(p, "delay_ms"), get(p, "gain")) {
-                *stretch_reflex = Some(StretchReflex {
-                    delay_ms: ms.max(0.0),
-                    gain_n_s_per_m: g.max(0.0),
-                });
-            }
-        }
-        _ => {}
-    }
-}
-
 impl ExtendedModel {
     /// The model a diagnosis names.
     #[must_use]
@@ -139,7 +49,7 @@ impl ExtendedModel {
         let mut effects = PlantEffects::default();
         let mut stretch_reflex = None;
         for c in &d.causes {
-            add_effect(&mut effects, &mut stretch_reflex, &c.name, &c.parameters);
+            c.effect.add_to(&mut effects, &mut stretch_reflex);
         }
         // The masses fitted with the causes (`Diagnosis::model`); an axis a rig lacks has
         // none, and is written as 0 (nothing moves on it).
@@ -157,7 +67,7 @@ impl ExtendedModel {
         ExtendedModel {
             fitted_to: d.session.clone(),
             cause: d.cause.clone(),
-            causes: d.causes.iter().map(|c| c.name.clone()).collect(),
+            causes: d.causes.iter().map(|c| c.name).collect(),
             gain: d.gain.unwrap_or(0.0),
             moving_mass_x_kg: m("moving_mass_x_kg"),
             moving_mass_y_kg: m("moving_mass_y_kg"),
@@ -205,7 +115,17 @@ impl ExtendedModel {
             rigtwin_session::files::MAX_CONFIG_BYTES,
         )
         .map_err(|e| err(e.to_string()))?;
-        toml::from_str(&text).map_err(|e| err(e.to_string()))
+        let model: ExtendedModel = toml::from_str(&text).map_err(|e| err(e.to_string()))?;
+        if model.cause != "none"
+            && let Err(e) = model.cause.parse::<EffectKind>()
+        {
+            let line = text
+                .lines()
+                .position(|l| l.trim_start().starts_with("cause"))
+                .map_or(0, |i| i + 1);
+            return Err(err(format!("line {line}: `cause`: {e} (or `none`)")));
+        }
+        Ok(model)
     }
 }
 
@@ -213,6 +133,7 @@ impl ExtendedModel {
 mod tests {
     #![allow(clippy::unwrap_used, clippy::expect_used)]
     use super::*;
+    use rigtwin_world::config::ForceRipple;
 
     fn with_ripple(ripple: &str) -> String {
         format!(
@@ -259,5 +180,30 @@ mod tests {
         assert!(err.contains("model.toml"), "{err}");
         assert!(err.contains("amplitude_n"), "{err}");
         assert!(err.contains("[x, y]"), "{err}");
+    }
+
+    /// The catalog's names are checked where they enter: a cause the catalog does not
+    /// have (a renamed or misspelt one) is refused naming the file, the key and the
+    /// names that exist, never read as a model that silently lacks the effect.
+    #[test]
+    fn an_unknown_cause_is_refused_naming_the_key_and_the_catalog() {
+        let base = with_ripple("amplitude_n = 1.5\npitch_m = 0.02");
+        let listed = base.replace(
+            "gain = 0.9",
+            "causes = [\"force-ripple\", \"rail_friction\"]\ngain = 0.9",
+        );
+        let err = read(&listed).unwrap_err().to_string();
+        assert!(err.contains("model.toml"), "{err}");
+        assert!(err.contains("rail_friction"), "{err}");
+        assert!(err.contains("rail-friction"), "{err}");
+        let first = base.replace("cause = \"force-ripple\"", "cause = \"cogging\"");
+        let err = read(&first).unwrap_err().to_string();
+        assert!(
+            err.contains("line 2: `cause`: `cogging` is not in the catalog"),
+            "{err}"
+        );
+        assert!(err.contains("force-ripple"), "{err}");
+        let ok = base.replace("gain = 0.9", "causes = [\"force-ripple\"]\ngain = 0.9");
+        assert_eq!(read(&ok).unwrap().causes, vec![EffectKind::ForceRipple]);
     }
 }

@@ -2,6 +2,7 @@
 //! with its figures (the plot that shows the cause, a held-out trial measured vs
 //! baseline vs extended, the ranking).
 
+use super::effect::EffectKind;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -139,8 +140,8 @@ pub fn table(d: &Diagnosis) -> String {
             let alone = d
                 .causes
                 .iter()
-                .any(|c| c.name == r.name && c.given.is_empty());
-            let later = d.causes.iter().any(|c| c.name == r.name);
+                .any(|c| Some(c.name) == r.kind && c.given.is_empty());
+            let later = d.causes.iter().any(|c| Some(c.name) == r.kind);
             let verdict = if later && !alone && !r.significant {
                 "jointly"
             } else {
@@ -163,7 +164,7 @@ pub fn table(d: &Diagnosis) -> String {
             !r.significant
                 && d.causes
                     .iter()
-                    .any(|c| c.name == r.name && !c.given.is_empty())
+                    .any(|c| Some(c.name) == r.kind && !c.given.is_empty())
         }) {
             let _ = writeln!(
                 out,
@@ -189,7 +190,7 @@ pub fn table(d: &Diagnosis) -> String {
                 r,
                 d.causes
                     .iter()
-                    .any(|c| c.name == r.name && c.given == r.given),
+                    .any(|c| Some(c.name) == r.kind && c.given == r.given),
             );
             let _ = writeln!(
                 out,
@@ -246,7 +247,7 @@ pub fn table(d: &Diagnosis) -> String {
         );
     }
     for c in &d.causes {
-        if let Some(text) = convention(&c.name) {
+        if let Some(text) = convention(c.name) {
             let _ = writeln!(out, "convention: {}: {text}", c.name);
         }
     }
@@ -301,26 +302,29 @@ fn verdict(r: &Ranked, named: bool) -> &'static str {
 /// What a named effect's parameters mean where a sign, a frame or a unit could be read
 /// two ways; printed under every cause that has one (`None` for the others).
 #[must_use]
-pub fn convention(name: &str) -> Option<&'static str> {
-    match name {
-        "sensor-rotation" => Some(
+pub fn convention(kind: EffectKind) -> Option<&'static str> {
+    match kind {
+        EffectKind::SensorRotation => Some(
             "angle_deg is how far the reading is turned from the true force, counter-clockwise \
              positive: reading = R(angle_deg) · F, i.e. the sensor frame is yawed by −angle_deg; \
              the correction is R(−angle_deg) applied to the reading (the world's \
              sensor.rotation_deg has the same sign)",
         ),
-        "force-ripple" => Some(
+        EffectKind::ForceRipple => Some(
             "the cogging amplitude_i · sin(2π q_i / pitch_m + phase_i_rad) is added to the motor \
              force of axis i at its cart's rail position q_i (m, rig frame); each axis has its \
              own magnet track, so its own amplitude and phase",
         ),
-        "stretch-reflex" => Some(
+        EffectKind::StretchReflex => Some(
             "gain is the arm model's (N of muscle activation per m/s of muscle stretch velocity); \
              joint_damping_* is the joint damping it adds after delay_ms (N m s/rad: shoulder ss, \
              cross se, elbow ee), endpoint_damping_* the same at the hand at the pulse onsets \
              (N s/m, rig axes)",
         ),
-        _ => None,
+        EffectKind::RailFriction
+        | EffectKind::ActuationDelay
+        | EffectKind::GripCompliance
+        | EffectKind::HandleMass => None,
     }
 }
 
@@ -336,7 +340,7 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
         .is_some()
     {
         // Against the state: velocity for friction, position of the long axis otherwise.
-        let by_velocity = c.name() == "rail-friction";
+        let by_velocity = c.kind() == Some(EffectKind::RailFriction);
         let axes: Vec<usize> = if by_velocity { vec![0, 1] } else { vec![1] };
         let mut cloud = Vec::new();
         for sig in &a.signals {
@@ -517,7 +521,7 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
 fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
     let c = hf.candidate.as_ref();
     let fit = &hf.fit;
-    if c.name() == "handle-mass" {
+    if c.kind() == Some(EffectKind::HandleMass) {
         let mut cloud = Vec::new();
         for r in &h.responses {
             let rows = hand_fit_rows(&HandBaseline, r, 0, &h.baseline.beta, h.fb_delay_s, None);
@@ -557,7 +561,7 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
         };
     }
     let norm: f64 = fit.folds.iter().map(|f| f.test_norm_sq).sum();
-    let stride = if c.name() == "grip-compliance" {
+    let stride = if c.kind() == Some(EffectKind::GripCompliance) {
         GRIP_TIME_S.len()
     } else {
         1
@@ -726,16 +730,17 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
     let d = &a.diagnosis;
     let mut written = Vec::new();
     let mut figs: Vec<(String, &str, Figure)> = Vec::new();
+    let cause = d.causes.first().map(|c| c.name);
     let hand_cause = a.hand.as_ref().and_then(|h| {
         h.fits
             .iter()
-            .find(|f| f.candidate.name() == d.cause)
+            .find(|f| cause.is_some() && f.candidate.kind() == cause)
             .map(|f| (h, f))
     });
     let shown = a
         .fits
         .iter()
-        .find(|f| f.candidate.name() == d.cause)
+        .find(|f| cause.is_some() && f.candidate.kind() == cause)
         .or(a.fits.first());
     if let Some((h, hf)) = hand_cause {
         figs.push((

@@ -18,6 +18,7 @@
 //! again: at the speeds of a reach (mostly < 0.15 m/s) and pitches above 5 mm the ripple
 //! stays below ~30 Hz, where the smoothing passes it.
 
+use crate::effect::EffectKind;
 use std::f64::consts::TAU;
 
 use super::candidate::{Candidate, Design, Designed, NUISANCE_COLUMNS, gain_bounds};
@@ -105,7 +106,10 @@ fn amplitude_phase(beta: &[f64], axis: usize) -> (f64, f64) {
 
 impl Candidate for ForceRipple {
     fn name(&self) -> &'static str {
-        "force-ripple"
+        EffectKind::ForceRipple.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::ForceRipple)
     }
     fn settings(&self) -> usize {
         self.n

@@ -18,6 +18,7 @@ use super::candidate::{
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::signals::BalanceSignals;
+use crate::effect::EffectKind;
 
 /// The sensor-rotation candidate: θ from `−max_deg` to `max_deg` in `step_deg`.
 #[derive(Debug, Clone, Copy)]
@@ -65,7 +66,10 @@ impl Designed for SensorRotation {
 
 impl Candidate for SensorRotation {
     fn name(&self) -> &'static str {
-        "sensor-rotation"
+        EffectKind::SensorRotation.name()
+    }
+    fn kind(&self) -> Option<EffectKind> {
+        Some(EffectKind::SensorRotation)
     }
     fn settings(&self) -> usize {
         (2.0 * self.max_deg / self.step_deg).round() as usize + 1
