@@ -1,7 +1,7 @@
 //! Speed of `diagnose` on a 32-trial session (the shared sessions' size), on 1 and 2
 //! rayon threads in the same run so that the speed-up is a ratio measured together.
 //! The session is rehearsed once from the shipped `reach-perturb` protocol at 1 kHz.
-//! Target of the issue: under 60 s on 2 cores.
+//! The requirement (README § Requirements, diagnosis speed): under 60 s on 2 cores.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::sync::atomic::AtomicBool;

@@ -4,7 +4,7 @@
 //!    protocol (seed 1, 2 worker threads, as the command line runs them) rehearsed and
 //!    reported, against the same plus the whole rehearsal written to an `.rrd` file (every
 //!    sample, the muscle activations, the ellipses, the events), logged as the command line
-//!    does: each trial as it is written, overlapped with the simulation. The bound is a slowdown of at most 20 %;
+//!    does: each trial as it is written, overlapped with the simulation. The requirement (README § Requirements) is a slowdown of at most 20 %;
 //!    both run in the same process, interleaved, and the ratio of their medians is printed.
 //! 2. A 32-trial 1 kHz session (the shared `example-friction` recording) read and logged to
 //!    an in-memory `.rrd`, against the same session only read.

@@ -2,9 +2,9 @@
 //! cogging at 24 mm hidden) in simulation. The diagnosed model must bring the simulated
 //! y motor command closer to the measured one: the ripple is a force the position loop
 //! has to fight along the reach, so it lives in the command (the positions barely see
-//! it). Measured before the subject fit: RMSE 2.53 N without, 2.12 N with the model; the
-//! test asks for 10 %. Both runs share the subject fitted to the baseline, so the
-//! difference is the model's alone.
+//! it). The test asks for 10 % (an earlier measurement:
+//! `hil/docs/notes/2026-12-03-diagnosis-tests.md`). Both runs share the subject fitted
+//! to the baseline, so the difference is the model's alone.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;

@@ -1,6 +1,6 @@
 //! The project's own example session (`recordings/example-ripple`, README there): its
 //! hidden force ripple (1.8 N on both axes, 24 mm pitch, magnets at `q = 0`) must be
-//! named with every parameter within 20 % (the tolerance) and a held-out gain of
+//! named with every parameter within 20 % (README § Requirements) and a held-out gain of
 //! at least 50 %.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 

@@ -5,23 +5,8 @@
 //! and what moved. The output is deterministic (same input, same bytes; no wall-clock
 //! field), so any difference is a change of the numbers or their text.
 //!
-//! The digests are printed by this test with `GOLDEN_PRINT=1`. They last moved with the
-//! force ripple per axis and the reflex's joint and endpoint units (every session: the
-//! ranking's ripple and reflex parameters; no cause named or its parameters changed),
-//! then with the bounded motor gains (`MOTOR_GAIN_TOLERANCE`; `example-friction`, whose
-//! baseline gains went from 1.95 and 1.77 to the bound and its friction from 2.651 N,
-//! 5.348 N s/m to 2.659 N, 5.309 N s/m for 2.66, 5.29 disclosed, and
-//! `example-rotation-mass`, whose ranked candidates' fits moved; the two sessions whose
-//! fits stay inside the bounds kept their bytes), then with forward selection, the
-//! friction knee's finer grid and the hand balance judged on the force turned back by
-//! a named rotation (every session: the `conditional` rounds or the friction knee's
-//! settings in the ranking; `example-rotation-mass`'s handle from 0.8205 to 0.7992 kg
-//! for 0.7812 disclosed, its gain from 0.57 to 0.75; no cause added or dropped), then
-//! with the library of laws outside the catalog (the rule's text; no session has
-//! structure left that a library term explains, so no `unexplained`), then with the
-//! final model's nominal parameters (`model`, added beside `baseline`; with that block
-//! taken out every session's output is the former bytes: the two-axis path did not
-//! move for the one-axis rigs).
+//! The digests are printed by this test with `GOLDEN_PRINT=1`. When they moved, and
+//! what moved with them: `hil/docs/notes/2026-12-03-diagnosis-tests.md`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;

@@ -2,7 +2,7 @@
 //! (`shared/recordings/`): their hidden effects are disclosed, so they check the
 //! diagnosis on data the project did not make. `example-none` must yield no cause;
 //! `example-friction` must yield rail friction with the disclosed
-//! `Fc = 2.66 N, b = 5.29 N s/m` within 20 % (the tolerance) and a large gain.
+//! `Fc = 2.66 N, b = 5.29 N s/m` within 20 % (README § Requirements) and a large gain.
 //! The two realistic ones carry a real rig's nuisances (sensor offset and drift, motor
 //! gain error and current noise, varying reaches, a drifting subject):
 //! `example-nuisance` hides nothing and must yield no cause; `example-rotation-mass`

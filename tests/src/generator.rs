@@ -55,7 +55,7 @@ pub const OUT_OF_CATALOG: [&str; 2] = ["cable-spring", "sensor-lowpass"];
 
 /// Pairs of effects a generated session may hide together ([`draw`] with `a+b`): two
 /// plant-side effects on one rig (friction and cogging, friction and a latency), one
-/// of each side (the friction and a heavier handle; a rotated sensor and a
+/// of each side (friction and a heavier handle; a rotated sensor and a
 /// heavier handle, the shared rig's), and a delay with a rotated sensor (both reshape
 /// the balance rather than add to it).
 pub const PAIRS: [&str; 5] = [

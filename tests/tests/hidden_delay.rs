@@ -69,8 +69,8 @@ fn report(effect: &str, seed: u64, h: &Hidden, d: &Diagnosis) {
     }
 }
 
-/// Seed 1003 hides 1.25 ms. Asserted: the cause, the delay within 20 % (the issue's
-/// tolerance; the world rounds it to whole 0.25 ms ticks, the grid is 25 µs) and at
+/// Seed 1003 hides 1.25 ms. Asserted: the cause, the delay within 20 % (README
+/// § Requirements; the world rounds it to whole 0.25 ms ticks, the grid is 25 µs) and at
 /// least 80 % of the excess over the rig's floor removed (module docs; measured 1.03
 /// here, 0.90–1.43 on seeds 1000–1009; a model that only named the delay would leave it).
 #[test]

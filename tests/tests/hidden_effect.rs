@@ -24,7 +24,7 @@
 //!
 //! Human side (hand balance, full 2×2 `D` and `K` fitted on the odd parts of each pair
 //! of opposite pulses, tested on the 12 repetitions, rows whitened in time and between
-//! the axes, `hil/src/discrepancy/hand.rs`). The sweeps (`sweep_confusion_matrix`,
+//! the axes, `hil/diagnose/src/hand.rs`). The sweeps (`sweep_confusion_matrix`,
 //! `sweep_false_alarms`, ignored; numbers in the README) give the confusion matrix and
 //! the false-alarm rate on sessions hiding nothing.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
@@ -68,8 +68,8 @@ fn check_design(effect: &str, seed: u64, design: &Design, min_gain: f64) -> (Gen
 }
 
 /// [`check_design`] with each hidden parameter's accepted range as factors of its
-/// value: `within(name)` gives `(low, high)` for `found / hidden` (the 20 % is
-/// `(0.8, 1.2)`).
+/// value: `within(name)` gives `(low, high)` for `found / hidden` (README § Requirements,
+/// each parameter within 20 %: `(0.8, 1.2)`).
 fn check_within(
     effect: &str,
     seed: u64,
@@ -182,7 +182,8 @@ fn hidden_handle_mass_is_found() {
     check("handle-mass", 1003);
 }
 
-/// The criteria in full for a reflex, on a session laid out to measure one
+/// The requirements in full (README § Requirements: named, each parameter within 20 %,
+/// held-out gain at least 50 %) for a reflex, on a session laid out to measure one
 /// ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N), under the arm's motor noise.
 /// Seed 1000 is the sweep's first, not a chosen one: over the sweep's 20 seeds so laid
 /// out, 20 are named with both parameters within 20 % and 19 reach a held-out gain of
@@ -245,8 +246,8 @@ fn hand_cause_report_has_the_force_and_the_weighted_response() {
 /// `δ`, module docs), so the gain is held to 0.8–1.6 times the hidden one, not 20 %. The
 /// delay guards the feedback shape's muscle weights: with every muscle at weight 1 this
 /// session's delay came out at the grid's 50 ms edge. The held-out gain is held to 25 %
-/// (measured here 0.55; 0.18–0.63 on the sweep seeds). The criteria in full are
-/// `hidden_stretch_reflex_is_found`'s, on a session laid out to measure a reflex.
+/// (measured here 0.55; 0.18–0.63 on the sweep seeds). The requirements in full (README
+/// § Requirements) are `hidden_stretch_reflex_is_found`'s, on a session laid out to measure a reflex.
 #[test]
 fn hidden_stretch_reflex_is_named_under_motor_noise() {
     check_within("stretch-reflex", 24, &Design::SHARED, 0.25, &|k| {
@@ -330,10 +331,9 @@ fn noise_free_reflex_is_found_and_nothing_else() {
 /// 0.009 without motor noise, and the unperturbed reference shared by all pulses)
 /// raises the ratio, what a longer session adds (more drift of the sensor and of the
 /// subject's impedance) too; measured 0.56 here (0.058 and 0.032), so 0.45–0.80 is
-/// asserted; outside it the floor would not be the pulses' noise. Without the
-/// per-response offsets ([`rigtwin_diagnose::RESPONSE_OFFSET_COLUMNS`]) the
-/// 24-pulse floor was 0.158 and the ratio 0.32: the reference mismatch of a few trials,
-/// not noise, set it. And more pulses, which give the replicate test more power, must
+/// asserted; outside it the floor would not be the pulses' noise (the per-response
+/// offsets, [`rigtwin_diagnose::RESPONSE_OFFSET_COLUMNS`], take up the reference mismatch
+/// of a few trials; `hil/docs/notes/2026-12-03-hand-balance-settings.md`). And more pulses, which give the replicate test more power, must
 /// not make it name a cause that is not there.
 #[test]
 fn more_pulses_lower_the_hand_noise_floor() {
@@ -402,7 +402,7 @@ fn friction_and_ripple_are_both_named() {
     check_pair("rail-friction+force-ripple", 31);
 }
 
-/// The rig: friction and a heavier handle, one on each balance.
+/// A rig with friction and a heavier handle, one effect on each balance.
 #[test]
 fn friction_and_a_heavier_handle_are_both_named() {
     check_pair("rail-friction+handle-mass", 32);
@@ -459,16 +459,15 @@ fn check_outside(effect: &str, seed: u64) {
 }
 
 /// A cable carrier pulls each cart towards a rest position, a law the catalog lacks:
-/// the diagnosis names no catalog effect (before the library, a 95 mm "ripple" was
-/// named) and reports the residual as unexplained, `force ≈ −k (y − y₀)` with `k`
+/// the diagnosis names no catalog effect (not a long-pitch "ripple") and reports the residual as unexplained, `force ≈ −k (y − y₀)` with `k`
 /// within 20 %.
 #[test]
 fn a_cable_spring_is_unexplained_not_a_ripple() {
     check_outside("cable-spring", 4000);
 }
 
-/// A force sensor read through a low-pass: no catalog effect (the hand balance, which
-/// reads the same sensor, judged the lag a grip compliance before it was undone), and
+/// A force sensor read through a low-pass: no catalog effect (not a grip compliance: the
+/// hand balance reads the same sensor with the lag undone), and
 /// `unexplained` holds `τ · dF/dt` with `τ` within 20 % of the filter's.
 #[test]
 fn a_sensor_lag_is_unexplained_not_a_grip() {

@@ -4,9 +4,9 @@
 //!
 //! Measured on the first four trials of `hold-sinusoid` (seed 1; four of its eight
 //! conditions, kept to four so the test runs in ~15 s): mean force over the ramp in
-//! (0–5 s) 9.8–10.0 N (before the fix, with the arm holding still during the device's
-//! ramp: 7.6–12.6 N). Over all eight, the peak force away from the position
-//! perturbations is 11.9 N (before: 37.5 N).
+//! (0–5 s) 9.8–10.0 N. Over all eight, the peak force away from the position
+//! perturbations is 11.9 N. With the arm holding still during the device's ramp it was
+//! not: `tests/docs/notes/2026-12-03-hold-force.md`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::protocol::Protocol;

@@ -151,9 +151,9 @@ pub const NUISANCE_COLUMNS: usize = 2;
 /// force constant's tolerance; a sensor gain error enters the same column, the balance
 /// sees only their ratio). Linear-motor datasheets specify the force constant to
 /// ±10 %; a fit that wants more takes up, through the command, an effect the baseline
-/// lacks: on a session with rail friction the free gain came out at 1.95 (and the x
-/// mass at 0.19 kg for about 9), on the project's ripple example at 1.71 and 1.66 (x
-/// mass 2.7 kg for 12). Every cart-balance fit holds `γ` within this bound
+/// lacks (a rail friction, a ripple), with a mass far from the rig's beside it (the
+/// measurements with a free gain: `hil/docs/notes/2026-12-03-cart-balance.md`). Every
+/// cart-balance fit holds `γ` within this bound
 /// ([`Gram::solve`]); a baseline at the bound is reported in the evidence.
 pub const MOTOR_GAIN_TOLERANCE: f64 = 0.10;
 

@@ -21,8 +21,8 @@ use crate::effect::EffectKind;
 
 /// Largest latency a nominal rig may have, s: one 4 kHz tick — the command computed at
 /// tick k acts from tick k + 1 at the latest. The 2 kHz zero-order hold adds nothing:
-/// the logged command is already the held one. (Two ticks, as before the balance
-/// filter, let the baseline absorb half of a 1 ms delay and cut its gain to ~35 %.)
+/// the logged command is already the held one. (A looser bound lets the baseline
+/// absorb part of a delay; `hil/docs/notes/2026-12-03-cart-balance.md`.)
 pub const NOMINAL_LATENCY_MAX_S: f64 = 0.25e-3;
 /// Largest actuation delay searched, s. Far beyond it the stiff position loop of an
 /// admittance rig could not stay stable.

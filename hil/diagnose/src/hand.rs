@@ -91,17 +91,15 @@ use super::hand_signals::{
 use rigtwin_session::{Axes, Session};
 
 /// Feedback delays the baseline searches, ms: the arm's default (000_*'s δ_s), which
-/// the drawn subjects keep. A grid of 30–120 ms was tried: on generated sessions it
-/// chose 30–50 ms with negative feedback gains (the delayed position term is nearly
-/// collinear with `K Δx` over the window) and let the baseline absorb part of the
-/// reflex, without lowering the held-out error of sessions hiding nothing.
+/// the drawn subjects keep. The delay is not searched more widely: the delayed position
+/// term is nearly collinear with `K Δx` over the window, so a wider grid buys a
+/// baseline that absorbs part of a reflex, not a better one (the measurements:
+/// `hil/docs/notes/2026-12-03-hand-balance-settings.md`).
 pub const FEEDBACK_DELAYS_MS: [f64; 1] = [60.0];
 /// Reflex delays searched, ms: 10 to 50 in steps of 1. A neural loop from stretch to
 /// force through the spinal cord takes at least ~10 ms even for the shoulder (short-
-/// latency reflexes of the upper limb appear at 20–50 ms); with the grid down to 5 ms,
-/// the one reflex named in a 20-seed sweep of hidden reflexes came out at 5 ms and
-/// 734 N s/m for 27 ms and 216 hidden: a near-instantaneous term that mimics inertia,
-/// not a reflex.
+/// latency reflexes of the upper limb appear at 20–50 ms); a shorter delay fits a
+/// near-instantaneous term that mimics inertia, not a reflex.
 pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
 /// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 41 values (~12 % apart).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 41);
@@ -114,10 +112,9 @@ pub const GRIP_TIME_S: [f64; 4] = [1e-3, 2.5e-3, 5e-3, 1e-2];
 /// `1/(2πτ)` ≈ 3 Hz, where the baseline's `K` and feedback act, while what tells a
 /// reflex's delay lies at 5–15 Hz.
 pub const HAND_NOISE_TIME_S: f64 = 0.05;
-/// Whether the baseline fits a scale on the known arm inertia. Off: on a generated
-/// session hiding 0.63 kg the scale came out 1.36 and the extra mass 0.79 kg (0.80 kg
-/// without the scale), on one hiding nothing the scale came out 1.07; it buys nothing
-/// for the mass and would let the baseline take up part of any inertial effect.
+/// Whether the baseline fits a scale on the known arm inertia. Off: it buys nothing
+/// for an extra mass's estimate and would let the baseline take up part of any inertial
+/// effect.
 pub const FIT_ARM_MASS_SCALE: bool = false;
 
 /// Hand kinematics a fit uses (the handle's, or the hand's through a compliant grip).
@@ -182,11 +179,9 @@ impl Kin {
 /// is symmetric, but the balance is linearised about a moving reach whose joints carry
 /// torque: the torque seen through the posture-dependent `J⁻ᵀ(q)` adds a stiffness that
 /// is not symmetric (the geometric stiffness), and the velocity-product terms of the
-/// arm's dynamics a damping that is not either. With symmetric matrices those parts were
-/// left to the candidates: on a noise-free generated session hiding a reflex of 33 ms
-/// and 182 N s/m, the reflex's held-out gain varied by 0.06 over delays of 10–50 ms and
-/// peaked at 21 ms, 210 N s/m; with full matrices it varies from 0.73 to 0.84 and peaks
-/// at 29 ms, 165 N s/m.
+/// arm's dynamics a damping that is not either. Symmetric matrices would leave those
+/// parts to the candidates, and a reflex's held-out gain would then hardly depend on
+/// its delay.
 #[must_use]
 pub const fn base_columns() -> usize {
     if FIT_ARM_MASS_SCALE { 10 } else { 9 }
@@ -292,8 +287,8 @@ pub trait HandCandidate: Sync + Send {
 /// of the movement, largest along the reach (its variance 3–20 times the other axis's
 /// on generated sessions hiding nothing). What tells a reflex's delay lies at 5–15 Hz
 /// and in both axes. Weighted, every frequency and direction of the response counts by
-/// its signal-to-noise ratio. Measured on the hidden-effect sweep (see the module
-/// documentation for the numbers).
+/// its signal-to-noise ratio. Measured on the hidden-effect sweep:
+/// `hil/docs/notes/2026-12-02-hand-balance.md`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Whitening {
     /// Correlation time `τ` removed, s (0 for none).
@@ -451,11 +446,11 @@ pub fn whitened_rows(
 /// never named. It takes up what a perturbed trial and its unperturbed references differ
 /// by that is not the response and holds over the 0.3 s window: the force sensor's
 /// offset drifting between the trials, the subject's steady push toward an end point a
-/// few millimetres from the references'. A slope per axis as well (a reach faster or
-/// slower than its references) lowered the baseline's floor further but took up part of
-/// an extra mass's response (measured in the README, "On sessions with a real rig's
-/// nuisances"). They are carried as columns, not as [`super::gram::Intercepts`], because
-/// the weighting filters them in time and mixes them between the axes like every column.
+/// few millimetres from the references'. There is no slope per axis (a reach faster or
+/// slower than its references): it takes up part of an extra mass's response
+/// (`hil/docs/notes/2026-12-02-hand-balance.md`). The constants are carried as columns,
+/// not as [`super::gram::Intercepts`], because the weighting filters them in time and
+/// mixes them between the axes like every column.
 pub const RESPONSE_OFFSET_COLUMNS: usize = 2;
 
 /// [`whitened_rows`], with the [`RESPONSE_OFFSET_COLUMNS`] (one constant per axis) after

@@ -14,10 +14,10 @@
 //!
 //! Why the balance filter and not the derivative-0 Savitzky–Golay filter for the force:
 //! with the latter, the two filters differ above their pass band, and the hand balance
-//! read that as inertia. Sessions generated without the arm's motor noise and hiding
-//! nothing fitted an extra handle mass of 0.053–0.056 kg every time, and hidden masses
-//! came out 0.07–0.08 kg high. With the balance filter the fitted mass on those sessions
-//! is 0.007–0.015 kg, and hidden masses of 0.44–0.92 kg come out within 3 %.
+//! reads that as inertia (an extra handle mass on sessions that hide none).
+//!
+//! The experiments behind the window, the weights and the odd parts:
+//! `hil/docs/notes/2026-12-03-hand-balance-settings.md`.
 //!
 //! Per sample of the window: `Δx, Δv, Δa` of the handle, `ΔF_hand = Δ(F_sensor + m_h a)`
 //! (the sensor is under the handle and reads `F_hand − m_h a`, `m_h` the manifest's
@@ -48,14 +48,9 @@ use rigtwin_session::{Session, Trial, TrialEntry};
 /// the arm's delayed feedback (60 ms in the project's arm, up to ~120 ms in people)
 /// answers the pulse within it, and a reflex of up to 50 ms acts twice over. Longer
 /// windows add mostly the slow drift between a perturbed trial and its reference
-/// (trial-to-trial variability of the reach grows with time since the alignment):
-/// on the project's sessions 0.5 s raised the baseline's held-out NRMSE without
-/// sharpening any candidate. With the rows weighted (`super::hand::Whitening`) the drift
-/// counts less, and the choice was measured again: 0.45 s named all 20 reflexes of the
-/// hidden-effect sweep (0.3 s: 19; both parameters within 20 % on 9 either way) but left
-/// 13 instead of 16 of its 20 hidden masses with a held-out gain of at least 0.5; 0.2 s
-/// named 19 of 26 generated reflexes where 0.3 s named 24, and 0.6 s put more delays at
-/// the grid's 10 ms edge.
+/// (trial-to-trial variability of the reach grows with time since the alignment);
+/// a shorter window misses reflexes, a longer one costs hidden masses their held-out
+/// gain and puts more reflex delays at the grid's edge.
 pub const HAND_WINDOW_S: f64 = 0.3;
 /// History kept before the onset for the delayed terms, s (the longest feedback delay
 /// of the search plus margin).
@@ -119,12 +114,8 @@ impl HandArm {
 /// (the project's arm gives its biarticular muscles none, so the torque split leaves
 /// them at or near zero) answers only its stretch, and half of that is the odd part
 /// of the responses to opposite pulses ([`odd_parts`]), where the hand balance is
-/// fitted. Measured on the hidden-effect sweep (20 sessions each): with every weight 1
-/// the fitted reflex gain came out mostly 15–35 % low and 9 of 20 reflexes had both
-/// parameters within 20 %; with these weights 12 of 20, the gains centred on the truth,
-/// with reflexes named, handle masses' held-out gains and sessions hiding nothing
-/// unchanged (19/20; 16/20 at least 0.5; 20/20 `none`). On noise-free sessions (seeds
-/// 1, 2, 3, 5) the reflex's held-out gains rose from 0.63–0.80 to 0.71–0.82.
+/// fitted. With every weight 1 the fitted reflex gain comes out low; with these weights
+/// it centres on the truth.
 #[must_use]
 pub fn odd_part_weights(model: &MuscleModel) -> [f64; MUSCLES] {
     let co = model.co_contraction(1.0);
@@ -240,17 +231,10 @@ pub enum OddUnits {
 ///
 /// - Everything even in the pulse: the terms of second order in the response. The
 ///   arm's tension `a + K(a)(e + τ ė)` has a stiffness that grows with activation, so
-///   the feedback's and any reflex's activation change `Δa` multiplies `Δe + τ Δė`. On
-///   a noise-free generated session hiding a reflex (33 ms, 182 N s/m) the direction
-///   averages put the reflex's delay at the search's 10 ms edge (404 N s/m, held-out
-///   gain 0.33); their odd parts put it at 21 ms, 210 N s/m, gain 0.61, and with the
-///   activation dependence switched off too (a local change to the generator) at
-///   27 ms, 185 N s/m. Sessions without motor noise: `cargo run --release -p
-///   rigtwin-tests --example generate -- stretch-reflex 2 <dir> --no-motor-noise`.
+///   the feedback's and any reflex's activation change `Δa` multiplies `Δe + τ Δė`;
+///   left in, these terms pull a reflex's fitted delay to the search's lower edge.
 /// - The reference: every response subtracts the same mean of unperturbed trials, whose
-///   own noise does not average out over directions but cancels in the difference. On
-///   generated sessions hiding nothing (seeds 1–6, symmetric `D`, `K` at the time) the
-///   hand baseline's held-out NRMSE fell from 0.11–0.16 to 0.06–0.08.
+///   own noise does not average out over directions but cancels in the difference.
 ///
 /// The arm matrices are averaged over both directions (the unperturbed posture's, up to
 /// the even terms). [`OddUnits`] says whether the repetitions are averaged first or

@@ -15,12 +15,12 @@
 //! Why not the derivative-0 Savitzky–Golay filter for the forces, which agrees with
 //! the acceleration filter in the pass band: above it the two leak differently. A rig
 //! whose stiff position loop oscillates (an actuation delay of 1–1.5 ms drives a
-//! 170–225 Hz limit cycle of tens of newtons in the command) leaked ~2 N of that
-//! oscillation into the smoothed command and far less into the smoothed acceleration,
-//! so no delay could balance it: 60 % of the residual remained with the delay fitted,
-//! and the fitted masses were 3 % high even on a plant without effects. With the
-//! balance filter the masses come out within 0.1 % of the plant's and the residual
-//! with the right delay falls to the noise floor of an effect-free session.
+//! 170–225 Hz limit cycle of tens of newtons in the command) leaks far more of that
+//! oscillation into the smoothed command than into the smoothed acceleration, so no
+//! delay can balance it. With the balance filter the masses come out within 0.1 % of
+//! the plant's and the residual with the right delay falls to the noise floor of an
+//! effect-free session. The measurements with the derivative-0 filter:
+//! `hil/docs/notes/2026-12-03-cart-balance.md`.
 //!
 //! The balance is evaluated on every `decim`-th sample, away from the ends by half a
 //! window: the filtered signals hold little above ~30 Hz, so samples closer than

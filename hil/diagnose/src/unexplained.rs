@@ -17,12 +17,11 @@
 //! term that explains the residual is a finding the catalog cannot make. A sensor gain
 //! `c · F` is not in the library: during a reach `u ≈ −F`, so it trades off with the
 //! motor gains the baseline holds within their tolerance and with the masses; in the
-//! library it took up what the bound left on 5 of 20 effect-free realistic sessions
-//! (coefficients −0.10 on both axes) and on 4 of the false-alarm sweep's
-//! (seeds 2004, 2011, 2044, 2052). A gain beyond the tolerance shows as a baseline gain at its bound (the
-//! evidence says so). Every column
-//! that is a force of the state goes through the balance filter like the measured
-//! forces; the force rate is the derivative of the filtered reading.
+//! library it takes up what the bound leaves on sessions that hide nothing (the
+//! measurements: `hil/docs/notes/2026-12-03-library-and-forward-selection.md`). A gain
+//! beyond the tolerance shows as a baseline gain at its bound (the evidence says so).
+//! Every column that is a force of the state goes through the balance filter like the
+//! measured forces; the force rate is the derivative of the filtered reading.
 //!
 //! The diagnosis uses the library twice ([`super::diagnose`]): from the nominal
 //! balance, where terms that explain more than the named causes and leave them nothing

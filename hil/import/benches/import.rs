@@ -1,5 +1,5 @@
-//! Import speed: the issue's done-when is "a 10-minute 4 kHz two-axis log imports in
-//! under 10 s".
+//! Import speed: the requirement (README § Requirements) is "a 10-minute 4 kHz two-axis
+//! log imports in under 10 s".
 //!
 //! One such log (2 400 000 samples: t, x, y, fx, fy, pert_fx, pert_fy, ref_x, ref_y,
 //! cmd_x, cmd_y, marker; positions in mm with 6 decimals, forces in N with 4; a marker

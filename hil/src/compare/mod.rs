@@ -3,7 +3,7 @@
 //! start and goal, perturbation angle; the pulse fires on the protocol's trigger, as on
 //! the rig) and measure how far the simulation is from the measurement:
 //!
-//! 1. **Subject fit** ([`fit_subject`]): subjects differ, so the baseline subject's
+//! 1. **Subject fit** ([`fit_subject`](crate::compare::fit_subject)): subjects differ, so the baseline subject's
 //!    muscle stiffness, co-contraction and feedback gain factors and the timing of the
 //!    reach are first fitted to the session (noise-free replays of a subset of trials).
 //! 2. **Replay**: every trial with the fitted subject and the model's own seeded noise
@@ -12,11 +12,11 @@
 //!    model says a subject is.
 //! 3. **Per channel and phase**: RMSE and NRMSE over the whole reach (row by row) and over
 //!    the 150 ms perturbation response (from each table's own onset, as the change from
-//!    the value there); per frequency band ([`band_errors`]); the Börner estimate of
+//!    the value there); per frequency band ([`band_errors`](rigtwin_diagnose::band_errors)); the Börner estimate of
 //!    D and K on the measured and on the simulated trials (the code path of
 //!    `rigtwin estimate`).
 //!
-//! With an extended model ([`ExtendedModel`]), the subject is still fitted with the
+//! With an extended model ([`ExtendedModel`](rigtwin_diagnose::ExtendedModel)), the subject is still fitted with the
 //! baseline model, then kept: the model's plant and human-side effects are added to that
 //! subject's replay, so baseline and model runs differ by the model alone.
 
