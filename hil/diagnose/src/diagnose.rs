@@ -357,6 +357,8 @@ pub struct Analysis {
     pub latency_s: f64,
     /// The baseline's fit (`None` when the session lacks the command channels).
     pub baseline: Option<CvFit>,
+    /// The cart balance's folds over [`Self::signals`] (`None` with the baseline).
+    pub folds: Option<Folds>,
     /// Each judged plant-side candidate's fit, best held-out gain first.
     pub fits: Vec<CandidateFit>,
     /// The hand balance (`None` when the session has no usable perturbations).
@@ -1134,12 +1136,14 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
     let mut plant_named: Vec<Cause> = Vec::new();
     let mut baseline_fit = None;
+    let mut cart_folds = None;
     let mut latency_s = 0.0;
     let mut plant_df = 0;
     let mut plant_t = f64::NAN;
     if plant_ok {
         let folds = Folds::interleaved(signals.len(), opts.folds);
         d.folds = folds.k;
+        cart_folds = Some(folds.clone());
         // The nominal latency, from all trials (one shared timing parameter; it is part
         // of the baseline and of every extended model alike, so it cannot favour any).
         let nominal = ActuationDelay::nominal();
@@ -1496,6 +1500,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         signals,
         latency_s,
         baseline: baseline_fit,
+        folds: cart_folds,
         fits,
         hand,
     })

@@ -18,6 +18,7 @@
 //! | `stats.rs` | Student's t and the jackknife behind the chance threshold |
 //! | `decide.rs` | the physical checks before a cause is named: material, inside its range, its own evidence agreeing |
 //! | `diagnose.rs` | ranking, decision, evidence ([`diagnose`], [`Diagnosis`]) |
+//! | `predict.rs` | held-out predictions of the motor command per trial and model ([`HeldOut`]), for the viewer |
 //! | `model.rs` | the extended model as TOML (`--write-model`) |
 //! | `plots.rs` | the PNG figures of `diagnosis.md` |
 //! | `bands.rs` | frequency content of a discrepancy: Welch band powers per channel |
@@ -38,6 +39,7 @@ mod hand_signals;
 mod joint;
 mod model;
 pub mod plots;
+mod predict;
 mod report;
 mod ripple;
 mod rotation;
@@ -70,6 +72,7 @@ pub use hand_signals::{
 };
 pub use joint::{Joint, Member, MemberParameters};
 pub use model::ExtendedModel;
+pub use predict::HeldOut;
 pub use report::{convention, table, write_report};
 pub use ripple::{ForceRipple, MAX_PITCH_M, MIN_PITCH_M};
 pub use rotation::SensorRotation;

@@ -8,14 +8,15 @@
 //! - [`log_diagnosis_overlay`]: for every trial the diagnosis used, held out in its
 //!   cross-validation fold, the motor command the cart force balance predicts with the
 //!   baseline and with each candidate effect (fitted without that trial) next to the
-//!   command on the same rows, under `predicted/plots/command/{x,y}/<model>`.
+//!   command on the same rows, under `predicted/plots/command/{x,y}/<model>`: the
+//!   diagnosis's own held-out predictions (`rigtwin_diagnose::HeldOut`), drawn as they are.
 //!
 //! Entity paths are in [`super::paths`].
 
 use super::columns::{Stamp, TrialSpan};
 use super::{EventLevel, Viewer, VizError, paths};
 use crate::session::{Session, Trial};
-use rigtwin_diagnose::{Analysis, Baseline, Candidate as _, DiscrepancyError, Folds};
+use rigtwin_diagnose::{Analysis, DiscrepancyError};
 
 /// Colours of the measured x and y channels.
 const MEASURED_RGB: [[u8; 3]; 2] = [[200, 50, 30], [30, 80, 200]];
@@ -145,9 +146,6 @@ pub fn log_diagnosis_overlay(
     analysis: &Analysis,
 ) -> Result<Overlaid, OverlayError> {
     let mut out = Overlaid::default();
-    let Some(base) = &analysis.baseline else {
-        return Ok(out);
-    };
     let rate_hz = session.manifest.rate_hz;
     // The spans `log_session` gave each trial: end to end, n / rate each.
     let mut spans = Vec::with_capacity(session.trials.len());
@@ -161,35 +159,16 @@ pub fn log_diagnosis_overlay(
         offset_s += span.duration_s;
         spans.push((entry.id, span, trial));
     }
-    let folds = Folds::interleaved(analysis.signals.len(), analysis.diagnosis.folds);
-    for (i, sig) in analysis.signals.iter().enumerate() {
-        let Some((_, span, trial)) = spans.iter().find(|(id, _, _)| *id == sig.id) else {
+    for held in analysis.held_out()? {
+        let Some((_, span, trial)) = spans.iter().find(|(id, _, _)| *id == held.id) else {
             continue;
         };
-        let Some(&fold) = folds.of_trial.get(i) else {
-            continue;
-        };
-        let Some(bf) = base.folds.get(fold) else {
-            continue;
-        };
-        let t_s: Vec<f64> = sig
+        let t_s: Vec<f64> = held
             .rows
             .iter()
-            .map(|&r| trial.t_s.get(r).copied().unwrap_or(r as f64 / sig.rate_hz))
+            .map(|&r| trial.t_s.get(r).copied().unwrap_or(r as f64 / rate_hz))
             .collect();
-        let u = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
-        let mut models: Vec<(&str, [Vec<f64>; 2])> = vec![(
-            "baseline",
-            Baseline.residual(sig, 0, &bf.beta, analysis.latency_s)?,
-        )];
-        for cf in &analysis.fits {
-            if let Some(f) = cf.fit.folds.get(fold) {
-                let r = cf
-                    .candidate
-                    .residual(sig, f.setting, &f.beta, analysis.latency_s)?;
-                models.push((cf.candidate.name(), r));
-            }
-        }
+        let (u, models) = (&held.command_n, &held.models);
         for axis in 0..2 {
             viewer.log_series(
                 &paths::predicted_command(axis, paths::MEASURED),
@@ -200,12 +179,8 @@ pub fn log_diagnosis_overlay(
                 &u[axis],
             )?;
             out.measured_samples += t_s.len();
-            for (k, (model, residual)) in models.iter().enumerate() {
-                let predicted: Vec<f64> = u[axis]
-                    .iter()
-                    .zip(&residual[axis])
-                    .map(|(u, r)| u - r)
-                    .collect();
+            for (k, (model, predicted)) in models.iter().enumerate() {
+                let predicted = &predicted[axis];
                 if predicted.len() != t_s.len() {
                     continue;
                 }
@@ -215,7 +190,7 @@ pub fn log_diagnosis_overlay(
                     MODEL_RGB[(k + 1).min(MODEL_RGB.len() - 1)],
                     span,
                     &t_s,
-                    &predicted,
+                    predicted,
                 )?;
                 out.simulated_samples += predicted.len();
             }
@@ -225,8 +200,8 @@ pub fn log_diagnosis_overlay(
             at,
             EventLevel::Info,
             &format!(
-                "trial {}: force balance predicted with the models fitted without fold {fold}",
-                sig.id
+                "trial {}: force balance predicted with the models fitted without fold {}",
+                held.id, held.fold
             ),
         )?;
         out.trials += 1;
