@@ -24,9 +24,7 @@ use crate::effect::EffectKind;
 /// the logged command is already the held one. (A looser bound lets the baseline
 /// absorb part of a delay; `hil/docs/notes/2026-12-03-cart-balance.md`.)
 pub const NOMINAL_LATENCY_MAX_S: f64 = 0.25e-3;
-/// Largest actuation delay searched, s. Far beyond it the stiff position loop of an
-/// admittance rig could not stay stable.
-pub const MAX_DELAY_S: f64 = 25e-3;
+pub use crate::signals::MAX_DELAY_S;
 
 /// A delay search over `[0, max_s]` in steps of `step_s`.
 #[derive(Debug, Clone, Copy)]

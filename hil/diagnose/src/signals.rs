@@ -31,6 +31,11 @@ use rigtwin_device::signal::{EdgeMode, SignalError, savgol_coeffs, savgol_filter
 use super::error::DiscrepancyError;
 use rigtwin_session::{Axes, Trial, TrialEntry};
 
+/// Largest actuation delay searched, s (the delay candidate's grid ends here, and every
+/// block of a trial keeps this much of the command before its rows). Far beyond it the
+/// stiff position loop of an admittance rig could not stay stable.
+pub const MAX_DELAY_S: f64 = 25e-3;
+
 /// Length of the smoothing window, s. 41 ms with a cubic passes ~30 Hz: enough for the
 /// reach (< 5 Hz), the 150 ms perturbation (< 20 Hz) and ripple up to v/p ≈ 30 Hz,
 /// while the acceleration taken from a 1 µm encoder stays quiet enough not to bias
@@ -194,7 +199,7 @@ impl BalanceSignals {
     #[must_use]
     pub fn block(&self, rows: &[usize]) -> BalanceSignals {
         let n = self.q[0].len();
-        let margin = self.window + (super::delay::MAX_DELAY_S * self.rate_hz).ceil() as usize + 2;
+        let margin = self.window + (MAX_DELAY_S * self.rate_hz).ceil() as usize + 2;
         let (first, last) = (
             rows.first().copied().unwrap_or(0),
             rows.last().copied().unwrap_or(0),

@@ -181,7 +181,7 @@ pub fn import(files: &[PathBuf], map: &Path, out: &Path) -> Result<Imported, Imp
     let mut cutouts: Vec<Cutout> = Vec::new();
     let mut first_rate: Option<(PathBuf, f64)> = None;
     for file in files {
-        let log = Log::read(file, &map.csv)?;
+        let log = crate::read::read_log(file, &map.csv)?;
         let c = cut_file(&log, &map, &zero_cols)?;
         if let Some((first, r)) = &first_rate {
             if ((c.rate_hz - r) / r).abs() > 1e-6 {

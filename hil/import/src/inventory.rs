@@ -48,7 +48,7 @@ fn looks_like_time(name: &str) -> bool {
 /// [`ImportError::Io`], [`ImportError::MatCorrupt`], [`ImportError::MatV73Corrupt`],
 /// [`ImportError::Csv`].
 pub fn inspect(path: &Path) -> Result<Inventory, ImportError> {
-    let log = Log::read(path, &CsvOptions::default())?;
+    let log = crate::read::read_log(path, &CsvOptions::default())?;
     Ok(inventory(&log))
 }
 

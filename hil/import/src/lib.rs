@@ -216,6 +216,7 @@ mod log;
 mod map;
 mod mat;
 mod mat73;
+mod read;
 
 pub use error::{ImportError, MapAt, SampleAt};
 pub use import::{Imported, MappedChannel, ZeroedChannel, import};

@@ -1,10 +1,10 @@
 //! A log in memory, whatever file it came from: named variables with a shape, an
 //! element class and (when numeric) their values as `f64`, column-major.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::error::{ImportError, MapAt, SampleAt};
-use crate::map::{CsvOptions, SourceRef};
+use crate::map::SourceRef;
 
 /// One variable of a log: a MATLAB array (struct fields flattened to `a.b.c`) or a
 /// CSV column.
@@ -37,39 +37,7 @@ pub(crate) struct Log {
     pub row_lines: Option<Vec<usize>>,
 }
 
-/// Whether `path` is read as a MAT-file: its extension, or its first bytes.
-fn is_mat(path: &Path, head: &[u8]) -> bool {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
-    ext.as_deref() == Some("mat") || head.starts_with(b"MATLAB")
-}
-
-/// The largest log `import` reads, bytes: 16 GiB.
-pub const MAX_LOG_BYTES: u64 = 16 << 30;
-
 impl Log {
-    /// Reads a `.mat` (by extension or content) or a CSV/TSV file.
-    pub(crate) fn read(path: &Path, csv: &CsvOptions) -> Result<Log, ImportError> {
-        // A log is read whole; 16 GiB is four hours of a 4 kHz 12-channel CSV.
-        let bytes = rigtwin_session::files::read_regular(path, MAX_LOG_BYTES).map_err(|e| {
-            ImportError::Io {
-                file: path.to_path_buf(),
-                source: e,
-            }
-        })?;
-        if is_mat(path, &bytes) {
-            if crate::mat73::is_v73(&bytes) {
-                crate::mat73::read(path, bytes)
-            } else {
-                crate::mat::read(path, &bytes)
-            }
-        } else {
-            crate::csvlog::read(path, &bytes, csv)
-        }
-    }
-
     /// The variable names, for errors.
     pub(crate) fn names(&self) -> Vec<String> {
         self.vars.iter().map(|v| v.name.clone()).collect()
