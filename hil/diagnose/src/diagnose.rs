@@ -1068,6 +1068,11 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 
 /// Diagnoses a session: see the module docs.
 ///
+/// The phases: the balance signals of every trial; the cart balance
+/// ([`judge_cart`]: baseline, candidates, forward selection, the library); the hand
+/// balance ([`rank_hand`], on the reading corrected by what the cart balance found about
+/// the sensor); the decision between the two balances ([`decide`]).
+///
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
@@ -1082,7 +1087,6 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         .flatten()
         .map(|s| s.on_axes(session.manifest.axes))
         .collect();
-    const MIN_TRIALS: usize = 4;
     // A continuous log imported as one or a few long trials: its folds are blocks of
     // time, so that held-out gains stay held out.
     let trials_used = signals.len();
@@ -1091,7 +1095,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     } else {
         signals
     };
-    let mut hand = judge_hand(session, opts.folds)?;
+    let hand = judge_hand(session, opts.folds)?;
     let mut not_judged: Vec<NotJudged> = Vec::new();
     let mut d = Diagnosis {
         session: session.dir.display().to_string(),
@@ -1131,110 +1135,15 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
 
     // What bounds the session's forces and motions, for both balances' checks.
     let scale = SessionScale::of_session(session, &signals)?;
+    let phase = Phase {
+        session,
+        opts,
+        alpha_each,
+        scale: &scale,
+    };
 
-    // ---- the cart balance (plant side) ----
-    let mut plant_ranked: Vec<(Ranked, CandidateFit)> = Vec::new();
-    let mut plant_named: Vec<Cause> = Vec::new();
-    let mut baseline_fit = None;
-    let mut cart_folds = None;
-    let mut latency_s = 0.0;
-    let mut plant_df = 0;
-    let mut plant_t = f64::NAN;
-    if plant_ok {
-        let folds = Folds::interleaved(signals.len(), opts.folds);
-        d.folds = folds.k;
-        cart_folds = Some(folds.clone());
-        // The nominal latency, from all trials (one shared timing parameter; it is part
-        // of the baseline and of every extended model alike, so it cannot favour any).
-        let nominal = ActuationDelay::nominal();
-        let lat_grams = grams_of(&nominal, &signals, 0.0)?;
-        let lat_fit = cross_validate(&lat_grams, &folds, "nominal latency")?;
-        latency_s = nominal.lag_s(lat_fit.setting);
-        let baseline = cross_validate(
-            &grams_of(&Baseline, &signals, latency_s)?,
-            &folds,
-            "baseline",
-        )?;
-        let base_nrmse = baseline.nrmse();
-        d.baseline = nominal_parameters(&baseline.beta, &signals);
-        // Without a force sensor the command is the only force the balance knows, so a
-        // mass below zero means its sign is reversed. (With a sensor it need not: a
-        // strong unmodelled cable spring pulled the upper cart's baseline mass to −1.2 kg.)
-        if signals.iter().all(|s| !s.sensed) {
-            for axis in ["x", "y"] {
-                if let Some(&m) = d.baseline.get(&format!("moving_mass_{axis}_kg"))
-                    && m <= 0.0
-                {
-                    return Err(DiscrepancyError::NegativeMass { axis, mass_kg: m });
-                }
-            }
-        }
-        d.baseline.insert("latency_ms".to_string(), latency_s * 1e3);
-        let travel = signals
-            .iter()
-            .map(|s| s.travel_m(0).max(s.travel_m(1)))
-            .fold(0.0, f64::max);
-        let mut candidates: Vec<Arc<dyn Candidate>> = vec![
-            Arc::new(RailFriction),
-            Arc::new(ForceRipple::for_travel(travel)),
-            Arc::new(ActuationDelay::candidate()),
-        ];
-        // A rotated sensor needs a sensor, and both of its axes.
-        if session.manifest.axes == Axes::Both && signals.iter().any(|s| s.sensed) {
-            candidates.push(Arc::new(SensorRotation::default()));
-        } else {
-            not_judged.push(NotJudged {
-                effect: EffectKind::SensorRotation,
-                reason: "needs a handle force sensor on both axes".to_string(),
-            });
-        }
-        let fits: Vec<CandidateFit> = candidates
-            .into_par_iter()
-            .map(|c| {
-                let g = grams_of(c.as_ref(), &signals, latency_s)?;
-                let fit = cross_validate(&g, &folds, c.name())?;
-                Ok(CandidateFit { candidate: c, fit })
-            })
-            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
-        plant_df = folds.k.saturating_sub(1).max(1);
-        plant_t = student_t_critical(alpha_each, plant_df as f64);
-        let judge = Judge {
-            base: &baseline,
-            base_nrmse,
-            t_critical: plant_t,
-            min_gain: opts.min_gain,
-            scale: &scale,
-            signals: &signals,
-            latency_s,
-        };
-        plant_ranked = fits
-            .into_iter()
-            .map(|cf| Ok((judge.rank(cf.candidate.as_ref(), &cf.fit, &[])?, cf)))
-            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
-        plant_ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
-        let selection = forward_select(&plant_ranked, &judge, &folds)?;
-        d.conditional = selection.rounds.clone();
-        let (kept, unexplained) =
-            outside_the_catalog(&selection, &mut plant_ranked, &judge, &folds)?;
-        plant_named = kept;
-        d.unexplained = unexplained;
-        let members: Vec<Member> = selection
-            .members
-            .iter()
-            .filter(|(c, _)| plant_named.iter().any(|k| Some(k.name) == c.kind()))
-            .cloned()
-            .collect();
-        d.model = if members.is_empty() {
-            d.baseline.clone()
-        } else {
-            let joint = Joint::given(members);
-            let fit = cross_validate(&grams_of(&joint, &signals, latency_s)?, &folds, "the model")?;
-            let mut m = nominal_parameters(&fit.beta, &signals);
-            m.insert("latency_ms".to_string(), latency_s * 1e3);
-            m
-        };
-        d.baseline_nrmse = Some(base_nrmse);
-        baseline_fit = Some(baseline);
+    let cart = if plant_ok {
+        Some(judge_cart(&phase, &signals, &mut d, &mut not_judged)?)
     } else {
         let reason = format!(
             "needs the motor command columns cmd_fx_n, cmd_fy_n in at least {MIN_TRIALS} trials; {} of {} have them",
@@ -1247,13 +1156,206 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
                 reason: reason.clone(),
             });
         }
+        None
+    };
+    let named: &[Cause] = cart.as_ref().map_or(&[], |c| &c.named);
+    let hand = rank_hand(&phase, hand, named, &mut d, &mut not_judged)?;
+    decide(&phase, cart.as_ref(), &hand, judged, &mut d)?;
+    if signals.len() != trials_used {
+        d.evidence.push(format!(
+            "the {trials_used} trial(s) with motor command were cut into {} blocks of at least {BLOCK_S} s \
+             as the units of cross-validation (fewer than {MIN_TRIALS} trials)",
+            signals.len()
+        ));
     }
+    if !plant_ok {
+        d.evidence.push(
+            "no plant-side judgement possible: the cart force balance needs the motor command"
+                .into(),
+        );
+    }
+    d.not_judged = not_judged;
+    Ok(Analysis {
+        diagnosis: d,
+        signals,
+        latency_s: cart.as_ref().map_or(0.0, |c| c.latency_s),
+        baseline: cart.as_ref().map(|c| c.baseline.clone()),
+        folds: cart.as_ref().map(|c| c.folds.clone()),
+        fits: cart
+            .map(|c| c.ranked.into_iter().map(|(_, f)| f).collect())
+            .unwrap_or_default(),
+        hand: hand.judgement,
+    })
+}
 
-    // ---- the hand balance (human side) ----
+/// Fewest trials (or blocks) the cart balance cross-validates.
+const MIN_TRIALS: usize = 4;
+
+/// What every phase of [`diagnose`] reads.
+struct Phase<'a> {
+    session: &'a Session,
+    opts: &'a DiagnoseOptions,
+    /// The per-candidate significance level (Bonferroni over the judged candidates).
+    alpha_each: f64,
+    scale: &'a SessionScale,
+}
+
+/// What the cart balance found.
+struct CartJudgement {
+    folds: Folds,
+    /// Nominal latency, s.
+    latency_s: f64,
+    baseline: CvFit,
+    /// Every candidate's first-round row and fit, best held-out gain first.
+    ranked: Vec<(Ranked, CandidateFit)>,
+    /// The causes named, in the order of selection.
+    named: Vec<Cause>,
+    /// Degrees of freedom and critical t of the fold test.
+    df: usize,
+    t_critical: f64,
+}
+
+/// The cart balance: the nominal latency and baseline, every plant-side candidate's
+/// cross-validated fit and row, forward selection, and the library's competition;
+/// fills the diagnosis's baseline, model, rounds and `unexplained`.
+fn judge_cart(
+    phase: &Phase<'_>,
+    signals: &[BalanceSignals],
+    d: &mut Diagnosis,
+    not_judged: &mut Vec<NotJudged>,
+) -> Result<CartJudgement, DiscrepancyError> {
+    let (session, opts, alpha_each, scale) =
+        (phase.session, phase.opts, phase.alpha_each, phase.scale);
+    let folds = Folds::interleaved(signals.len(), opts.folds);
+    d.folds = folds.k;
+    // The nominal latency, from all trials (one shared timing parameter; it is part
+    // of the baseline and of every extended model alike, so it cannot favour any).
+    let nominal = ActuationDelay::nominal();
+    let lat_grams = grams_of(&nominal, signals, 0.0)?;
+    let lat_fit = cross_validate(&lat_grams, &folds, "nominal latency")?;
+    let latency_s = nominal.lag_s(lat_fit.setting);
+    let baseline = cross_validate(
+        &grams_of(&Baseline, signals, latency_s)?,
+        &folds,
+        "baseline",
+    )?;
+    let base_nrmse = baseline.nrmse();
+    d.baseline = nominal_parameters(&baseline.beta, signals);
+    // Without a force sensor the command is the only force the balance knows, so a
+    // mass below zero means its sign is reversed. (With a sensor it need not: a
+    // strong unmodelled cable spring pulled the upper cart's baseline mass to −1.2 kg.)
+    if signals.iter().all(|s| !s.sensed) {
+        for axis in ["x", "y"] {
+            if let Some(&m) = d.baseline.get(&format!("moving_mass_{axis}_kg"))
+                && m <= 0.0
+            {
+                return Err(DiscrepancyError::NegativeMass { axis, mass_kg: m });
+            }
+        }
+    }
+    d.baseline.insert("latency_ms".to_string(), latency_s * 1e3);
+    let travel = signals
+        .iter()
+        .map(|s| s.travel_m(0).max(s.travel_m(1)))
+        .fold(0.0, f64::max);
+    let mut candidates: Vec<Arc<dyn Candidate>> = vec![
+        Arc::new(RailFriction),
+        Arc::new(ForceRipple::for_travel(travel)),
+        Arc::new(ActuationDelay::candidate()),
+    ];
+    // A rotated sensor needs a sensor, and both of its axes.
+    if session.manifest.axes == Axes::Both && signals.iter().any(|s| s.sensed) {
+        candidates.push(Arc::new(SensorRotation::default()));
+    } else {
+        not_judged.push(NotJudged {
+            effect: EffectKind::SensorRotation,
+            reason: "needs a handle force sensor on both axes".to_string(),
+        });
+    }
+    let fits: Vec<CandidateFit> = candidates
+        .into_par_iter()
+        .map(|c| {
+            let g = grams_of(c.as_ref(), signals, latency_s)?;
+            let fit = cross_validate(&g, &folds, c.name())?;
+            Ok(CandidateFit { candidate: c, fit })
+        })
+        .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+    let df = folds.k.saturating_sub(1).max(1);
+    let t_critical = student_t_critical(alpha_each, df as f64);
+    let judge = Judge {
+        base: &baseline,
+        base_nrmse,
+        t_critical,
+        min_gain: opts.min_gain,
+        scale,
+        signals,
+        latency_s,
+    };
+    let mut ranked: Vec<(Ranked, CandidateFit)> = fits
+        .into_iter()
+        .map(|cf| Ok((judge.rank(cf.candidate.as_ref(), &cf.fit, &[])?, cf)))
+        .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+    ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+    let selection = forward_select(&ranked, &judge, &folds)?;
+    d.conditional = selection.rounds.clone();
+    let (kept, unexplained) = outside_the_catalog(&selection, &mut ranked, &judge, &folds)?;
+    d.unexplained = unexplained;
+    let members: Vec<Member> = selection
+        .members
+        .iter()
+        .filter(|(c, _)| kept.iter().any(|k| Some(k.name) == c.kind()))
+        .cloned()
+        .collect();
+    d.model = if members.is_empty() {
+        d.baseline.clone()
+    } else {
+        let joint = Joint::given(members);
+        let fit = cross_validate(&grams_of(&joint, signals, latency_s)?, &folds, "the model")?;
+        let mut m = nominal_parameters(&fit.beta, signals);
+        m.insert("latency_ms".to_string(), latency_s * 1e3);
+        m
+    };
+    d.baseline_nrmse = Some(base_nrmse);
+    Ok(CartJudgement {
+        folds,
+        latency_s,
+        baseline,
+        ranked,
+        named: kept,
+        df,
+        t_critical,
+    })
+}
+
+/// The hand balance's verdicts.
+struct HandRanking {
+    /// The judgement (`None` when the session cannot carry it).
+    judgement: Option<HandJudgement>,
+    /// Every human-side candidate's row, best held-out gain first.
+    ranked: Vec<Ranked>,
+    /// Degrees of freedom and critical t of its test.
+    df: Option<usize>,
+    t_critical: Option<f64>,
+    /// How the sensor's reading was corrected before judging, for the evidence.
+    corrected: Vec<String>,
+}
+
+/// The hand balance: judged again on the reading turned back by a rotation `named` on
+/// the cart balance and with a lag of the reading found there undone; each human-side
+/// candidate's row; fills the diagnosis's hand baseline and weighting.
+fn rank_hand(
+    phase: &Phase<'_>,
+    mut hand: Result<HandJudgement, String>,
+    named: &[Cause],
+    d: &mut Diagnosis,
+    not_judged: &mut Vec<NotJudged>,
+) -> Result<HandRanking, DiscrepancyError> {
+    let (session, opts, alpha_each, scale) =
+        (phase.session, phase.opts, phase.alpha_each, phase.scale);
     // The sensor reads the hand's force too: with a rotation named on the cart balance,
     // or a lag of the reading found there outside the catalog, the hand balance judges
     // the reading turned back and its lag undone.
-    let angle = plant_named.iter().find_map(|c| match c.effect {
+    let angle = named.iter().find_map(|c| match c.effect {
         Effect::SensorRotation(s) => Some(s.rotation_deg),
         _ => None,
     });
@@ -1281,10 +1383,9 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         }
         hand = judge_hand(&s, opts.folds)?;
     }
-    let mut hand_ranked: Vec<Ranked> = Vec::new();
-    let mut hand_df = None;
-    let mut hand_t = None;
-    let hand = match hand {
+    let mut ranked: Vec<Ranked> = Vec::new();
+    let (mut df_out, mut t_out) = (None, None);
+    let judgement = match hand {
         Ok(h) => {
             let base_nrmse = h.baseline.nrmse();
             d.hand_trials_used = h.responses.iter().map(|r| r.trials.len()).sum();
@@ -1310,68 +1411,15 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             let test_folds = h.replicates.as_ref().map_or(&h.folds, |r| &r.folds);
             let df = test_folds.k.saturating_sub(1).max(1);
             let t_crit = student_t_critical(alpha_each, df as f64);
-            hand_df = Some(df);
-            hand_t = Some(t_crit);
-            for (i, hf) in h.fits.iter().enumerate() {
-                let c = hf.candidate.as_ref();
-                let fit = &hf.fit;
-                let (nrmse, gain, _, _) = fold_stats(fit, &h.baseline, base_nrmse);
-                // The test runs on independent units when the fitted ones average
-                // repetitions, else on the fitted ones.
-                let (test_fit, test_base) = h
-                    .replicates
-                    .as_ref()
-                    .and_then(|rep| rep.fits.get(i).map(|f| (f, &rep.baseline)))
-                    .unwrap_or((fit, &h.baseline));
-                let (_, _, fold_gains, t) = fold_stats(test_fit, test_base, test_base.nrmse());
-                let fold_params: Vec<Vec<(String, f64)>> = fit
-                    .folds
+            ranked.extend(
+                h.fits
                     .iter()
-                    .map(|f| c.parameters(f.setting, &f.beta, h.fb_delay_s))
-                    .collect();
-                let with_units = |mut p: Vec<(String, f64)>| {
-                    // A reflex also in joint and endpoint units (from its gain).
-                    if c.kind() == Some(EffectKind::StretchReflex)
-                        && let Some(g) = p.iter().find(|(k, _)| k == "gain").map(|(_, g)| *g)
-                    {
-                        p.extend(h.reflex_units(g));
-                    }
-                    p
-                };
-                let fold_params: Vec<Vec<(String, f64)>> =
-                    fold_params.into_iter().map(with_units).collect();
-                let (parameters, parameter_se) = params_with_se(
-                    with_units(c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
-                    &fold_params,
-                );
-                let mut rejected = Vec::new();
-                if !c.physical(fit.setting, &fit.beta) {
-                    rejected.push("unphysical: a negative mass or reflex gain".to_string());
-                }
-                rejected.extend(immaterial(c.kind(), &parameters, &scale, 0.0));
-                rejected.extend(at_edge(
-                    c.kind(),
-                    c.setting(fit.setting),
-                    fit.setting,
-                    c.settings(),
-                ));
-                hand_ranked.push(Ranked {
-                    name: c.name().to_string(),
-                    kind: c.kind(),
-                    balance: "hand".into(),
-                    gain,
-                    extended_nrmse: nrmse,
-                    fold_gains,
-                    t_statistic: t,
-                    significant: t > t_crit && gain >= opts.min_gain && rejected.is_empty(),
-                    rejected,
-                    evidence_r2: None,
-                    parameters,
-                    parameter_se,
-                    given: Vec::new(),
-                });
-            }
-            hand_ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+                    .enumerate()
+                    .map(|(i, hf)| hand_row(&h, i, hf, t_crit, opts.min_gain, scale)),
+            );
+            df_out = Some(df);
+            t_out = Some(t_crit);
+            ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
             Some(h)
         }
         Err(why) => {
@@ -1384,8 +1432,100 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
             None
         }
     };
+    Ok(HandRanking {
+        judgement,
+        ranked,
+        df: df_out,
+        t_critical: t_out,
+        corrected,
+    })
+}
 
-    // ---- the decision ----
+/// The hand balance's row of its `i`-th candidate `hf`: statistics (the test on
+/// independent units when the fitted ones average repetitions), parameters with the
+/// reflex's joint and endpoint units, and the physical checks.
+fn hand_row(
+    h: &HandJudgement,
+    i: usize,
+    hf: &super::hand::HandFit,
+    t_crit: f64,
+    min_gain: f64,
+    scale: &SessionScale,
+) -> Ranked {
+    let base_nrmse = h.baseline.nrmse();
+    let c = hf.candidate.as_ref();
+    let fit = &hf.fit;
+    let (nrmse, gain, _, _) = fold_stats(fit, &h.baseline, base_nrmse);
+    // The test runs on independent units when the fitted ones average
+    // repetitions, else on the fitted ones.
+    let (test_fit, test_base) = h
+        .replicates
+        .as_ref()
+        .and_then(|rep| rep.fits.get(i).map(|f| (f, &rep.baseline)))
+        .unwrap_or((fit, &h.baseline));
+    let (_, _, fold_gains, t) = fold_stats(test_fit, test_base, test_base.nrmse());
+    let fold_params: Vec<Vec<(String, f64)>> = fit
+        .folds
+        .iter()
+        .map(|f| c.parameters(f.setting, &f.beta, h.fb_delay_s))
+        .collect();
+    let with_units = |mut p: Vec<(String, f64)>| {
+        // A reflex also in joint and endpoint units (from its gain).
+        if c.kind() == Some(EffectKind::StretchReflex)
+            && let Some(g) = p.iter().find(|(k, _)| k == "gain").map(|(_, g)| *g)
+        {
+            p.extend(h.reflex_units(g));
+        }
+        p
+    };
+    let fold_params: Vec<Vec<(String, f64)>> = fold_params.into_iter().map(with_units).collect();
+    let (parameters, parameter_se) = params_with_se(
+        with_units(c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
+        &fold_params,
+    );
+    let mut rejected = Vec::new();
+    if !c.physical(fit.setting, &fit.beta) {
+        rejected.push("unphysical: a negative mass or reflex gain".to_string());
+    }
+    rejected.extend(immaterial(c.kind(), &parameters, scale, 0.0));
+    rejected.extend(at_edge(
+        c.kind(),
+        c.setting(fit.setting),
+        fit.setting,
+        c.settings(),
+    ));
+    Ranked {
+        name: c.name().to_string(),
+        kind: c.kind(),
+        balance: "hand".into(),
+        gain,
+        extended_nrmse: nrmse,
+        fold_gains,
+        t_statistic: t,
+        significant: t > t_crit && gain >= min_gain && rejected.is_empty(),
+        rejected,
+        evidence_r2: None,
+        parameters,
+        parameter_se,
+        given: Vec::new(),
+    }
+}
+
+/// The decision between the balances: the plant's causes in the order of selection and
+/// the hand's best passing candidate, the balance whose first cause gains more first;
+/// the ranking, the rule and the evidence.
+fn decide(
+    phase: &Phase<'_>,
+    cart: Option<&CartJudgement>,
+    hand: &HandRanking,
+    judged: usize,
+    d: &mut Diagnosis,
+) -> Result<(), DiscrepancyError> {
+    let (session, opts, alpha_each) = (phase.session, phase.opts, phase.alpha_each);
+    let plant_ranked: &[(Ranked, CandidateFit)] = cart.map_or(&[], |c| &c.ranked);
+    let plant_named: Vec<Cause> = cart.map_or_else(Vec::new, |c| c.named.clone());
+    let (plant_df, plant_t) = cart.map_or((0, f64::NAN), |c| (c.df, c.t_critical));
+    let (hand_ranked, hand_df, hand_t) = (&hand.ranked, hand.df, hand.t_critical);
     let cart_nrmse = d.baseline_nrmse;
     d.cart_baseline_nrmse = cart_nrmse;
     if d.baseline_nrmse.is_none() {
@@ -1469,41 +1609,18 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     }
     if session.manifest.axes != Axes::Both {
         d.ranking = std::mem::take(&mut ranking);
-        only_present_axes(&mut d, session.manifest.axes);
+        only_present_axes(d, session.manifest.axes);
         ranking = std::mem::take(&mut d.ranking);
     }
-    d.evidence = evidence(&d, &ranking, cart_nrmse, hand.as_ref());
-    if !corrected.is_empty() {
+    d.evidence = evidence(d, &ranking, cart_nrmse, hand.judgement.as_ref());
+    if !hand.corrected.is_empty() {
         d.evidence.push(format!(
             "the hand balance judged the sensor force {}",
-            corrected.join(", ")
+            hand.corrected.join(", ")
         ));
     }
-    if signals.len() != trials_used {
-        d.evidence.push(format!(
-            "the {trials_used} trial(s) with motor command were cut into {} blocks of at least {BLOCK_S} s \
-             as the units of cross-validation (fewer than {MIN_TRIALS} trials)",
-            signals.len()
-        ));
-    }
-    if !plant_ok {
-        d.evidence.push(
-            "no plant-side judgement possible: the cart force balance needs the motor command"
-                .into(),
-        );
-    }
-    d.not_judged = not_judged;
     d.ranking = ranking;
-    let fits = plant_ranked.into_iter().map(|(_, f)| f).collect();
-    Ok(Analysis {
-        diagnosis: d,
-        signals,
-        latency_s,
-        baseline: baseline_fit,
-        folds: cart_folds,
-        fits,
-        hand,
-    })
+    Ok(())
 }
 
 fn evidence(
