@@ -177,6 +177,160 @@ fn wrap(a: f64) -> f64 {
     }
 }
 
+/// A dynamic body at `pos` that never sleeps, with its mass and rotational inertia at
+/// its origin.
+fn dynamic_body(pos: [f64; 2], mass: f64, inertia: f64) -> RigidBodyBuilder {
+    RigidBodyBuilder::dynamic()
+        .translation(v(pos))
+        .additional_mass_properties(MassProperties::new(Vector::ZERO, mass, inertia))
+        .can_sleep(false)
+}
+
+/// The manipulandum's bodies on their rails: the fixed base, the lower (x) cart, the
+/// upper (y) cart on it, and the handle on the force sensor.
+struct Carriage {
+    base: RigidBodyHandle,
+    lower: RigidBodyHandle,
+    upper: RigidBodyHandle,
+    handle: RigidBodyHandle,
+    sensor_joint: ImpulseJointHandle,
+}
+
+/// Builds the carriage with the handle at `cfg.initial_handle_m`.
+fn carriage(world: &mut PhysicsWorld, cfg: &RigConfig) -> Carriage {
+    let p0 = cfg.initial_handle_m;
+    let base = world.bodies.insert(RigidBodyBuilder::fixed());
+    // Carts and handle never rotate: the rails hold them. Their rotation is removed
+    // as a body degree of freedom instead of by angular joint rows, which costs the
+    // solver nothing (rapier's step time grows with every constraint row).
+    let lower = world.bodies.insert(
+        dynamic_body([p0[0], 0.0], cfg.lower_cart_mass_kg, CART_INERTIA_KG_M2)
+            // x rail: the prismatic joint to the fixed base, as locked body axes.
+            .locked_axes(LockedAxes::TRANSLATION_LOCKED_Y | LockedAxes::ROTATION_LOCKED),
+    );
+    let upper = world.bodies.insert(
+        dynamic_body(p0, cfg.upper_cart_mass_kg, CART_INERTIA_KG_M2)
+            .locked_axes(LockedAxes::ROTATION_LOCKED),
+    );
+    let handle_mass = cfg.handle_mass_kg + cfg.effects.handle_mass.map_or(0.0, |h| h.extra_mass_kg);
+    let handle = world.bodies.insert(
+        dynamic_body(p0, handle_mass, HANDLE_INERTIA_KG_M2)
+            .locked_axes(LockedAxes::ROTATION_LOCKED),
+    );
+    // y rail: prismatic along y from the lower cart; its angular row is redundant
+    // with the locked rotations, so only the x row remains.
+    world.impulse_joints.insert(
+        lower,
+        upper,
+        GenericJointBuilder::new(JointAxesMask::LIN_X).local_anchor2(Vector::new(0.0, -p0[1])),
+        true,
+    );
+    // The force sensor: the handle fixed on the upper cart (translation rows; the
+    // rotation row is again redundant).
+    let sensor_joint = world.impulse_joints.insert(
+        upper,
+        handle,
+        GenericJointBuilder::new(JointAxesMask::LIN_X | JointAxesMask::LIN_Y),
+        true,
+    );
+    Carriage {
+        base,
+        lower,
+        upper,
+        handle,
+        sensor_joint,
+    }
+}
+
+/// The two-link arm: links at the posture that puts the hand at `p0` (elbow down),
+/// jointed to the base at the shoulder and to each other, and held to the handle by a
+/// pin (or, with a compliant `grip`, by the spring-damper the step applies).
+///
+/// # Errors
+/// [`WorldError`] when the hand's start is out of the arm's reach.
+fn attach_arm(
+    world: &mut PhysicsWorld,
+    c: &Carriage,
+    p0: [f64; 2],
+    shoulder_m: [f64; 2],
+    params: &ArmParams,
+    grasp: Grasp,
+    grip: Option<GripCompliance>,
+) -> Result<ArmLinks, WorldError> {
+    let (base, handle) = (c.base, c.handle);
+    let shoulder = Vector2::new(shoulder_m[0], shoulder_m[1]);
+    let hand = Vector2::new(p0[0], p0[1]) - shoulder;
+    let q = kinematics::inverse(params, hand, Elbow::Down)?;
+    let elbow = shoulder + kinematics::elbow(params, q);
+    let link = |origin: Vector2<f64>, angle: f64, seg: &rigtwin_arm::params::Segment| {
+        RigidBodyBuilder::dynamic()
+            .translation(Vector::new(origin.x, origin.y))
+            .rotation(angle)
+            .additional_mass_properties(MassProperties::new(
+                Vector::new(seg.com_m, 0.0),
+                seg.mass_kg,
+                seg.inertia_kg_m2,
+            ))
+            .can_sleep(false)
+    };
+    let ub = world.bodies.insert(link(shoulder, q[0], &params.upper));
+    let fb = world.bodies.insert(link(elbow, q[0] + q[1], &params.fore));
+    world.impulse_joints.insert(
+        base,
+        ub,
+        RevoluteJointBuilder::new().local_anchor1(Vector::new(shoulder.x, shoulder.y)),
+        true,
+    );
+    world.impulse_joints.insert(
+        ub,
+        fb,
+        RevoluteJointBuilder::new().local_anchor1(Vector::new(params.upper.length_m, 0.0)),
+        true,
+    );
+    let pin = if grasp == Grasp::Held && grip.is_none() {
+        Some(world.impulse_joints.insert(
+            fb,
+            handle,
+            RevoluteJointBuilder::new().local_anchor1(Vector::new(params.fore.length_m, 0.0)),
+            true,
+        ))
+    } else {
+        None
+    };
+    Ok(ArmLinks {
+        params: Box::new(params.clone()),
+        shoulder_m: shoulder,
+        upper: ub,
+        fore: fb,
+        pin,
+        grip: if grasp == Grasp::Held { grip } else { None },
+        q,
+        torque_nm: [0.0; 2],
+    })
+}
+
+/// A point mass pinned to the handle, pulled towards `p0` by a spring.
+fn attach_spring_mass(
+    world: &mut PhysicsWorld,
+    handle: RigidBodyHandle,
+    p0: [f64; 2],
+    mass_kg: f64,
+    stiffness_n_per_m: [f64; 2],
+) -> SpringMass {
+    // A compact block: radius of gyration 3 cm.
+    let body = world
+        .bodies
+        .insert(dynamic_body(p0, mass_kg, mass_kg * 0.03 * 0.03));
+    world
+        .impulse_joints
+        .insert(handle, body, RevoluteJointBuilder::new(), true);
+    SpringMass {
+        body,
+        stiffness_n_per_m,
+        rest_m: p0,
+    }
+}
+
 impl SimRig {
     /// Build the plant from `cfg`, with its random stream seeded by `rng`.
     pub fn new(cfg: RigConfig, rng: ChaCha8Rng) -> Result<SimRig, WorldError> {
@@ -184,49 +338,10 @@ impl SimRig {
         let mut world = PhysicsWorld::new();
         world.gravity = Vector::ZERO;
         world.integration_parameters = integration_parameters(&cfg);
-
+        // Bodies and joints are inserted in one fixed order (carriage, then what is
+        // attached to the handle): rapier's handles, and so its results, follow it.
+        let c = carriage(&mut world, &cfg);
         let p0 = cfg.initial_handle_m;
-        let base = world.bodies.insert(RigidBodyBuilder::fixed());
-        let dynamic = |pos: [f64; 2], mass: f64, inertia: f64| {
-            RigidBodyBuilder::dynamic()
-                .translation(v(pos))
-                .additional_mass_properties(MassProperties::new(Vector::ZERO, mass, inertia))
-                .can_sleep(false)
-        };
-        // Carts and handle never rotate: the rails hold them. Their rotation is removed
-        // as a body degree of freedom instead of by angular joint rows, which costs the
-        // solver nothing (rapier's step time grows with every constraint row).
-        let lower = world.bodies.insert(
-            dynamic([p0[0], 0.0], cfg.lower_cart_mass_kg, CART_INERTIA_KG_M2)
-                // x rail: the prismatic joint to the fixed base, as locked body axes.
-                .locked_axes(LockedAxes::TRANSLATION_LOCKED_Y | LockedAxes::ROTATION_LOCKED),
-        );
-        let upper = world.bodies.insert(
-            dynamic(p0, cfg.upper_cart_mass_kg, CART_INERTIA_KG_M2)
-                .locked_axes(LockedAxes::ROTATION_LOCKED),
-        );
-        let handle_mass =
-            cfg.handle_mass_kg + cfg.effects.handle_mass.map_or(0.0, |h| h.extra_mass_kg);
-        let handle = world.bodies.insert(
-            dynamic(p0, handle_mass, HANDLE_INERTIA_KG_M2).locked_axes(LockedAxes::ROTATION_LOCKED),
-        );
-        // y rail: prismatic along y from the lower cart; its angular row is redundant
-        // with the locked rotations, so only the x row remains.
-        world.impulse_joints.insert(
-            lower,
-            upper,
-            GenericJointBuilder::new(JointAxesMask::LIN_X).local_anchor2(Vector::new(0.0, -p0[1])),
-            true,
-        );
-        // The force sensor: the handle fixed on the upper cart (translation rows; the
-        // rotation row is again redundant).
-        let sensor_joint = world.impulse_joints.insert(
-            upper,
-            handle,
-            GenericJointBuilder::new(JointAxesMask::LIN_X | JointAxesMask::LIN_Y),
-            true,
-        );
-
         let mut arm = None;
         let mut spring_mass = None;
         match &cfg.attachment {
@@ -235,82 +350,31 @@ impl SimRig {
                 arm: params,
                 grasp,
             } => {
-                let shoulder = Vector2::new(shoulder_m[0], shoulder_m[1]);
-                let hand = Vector2::new(p0[0], p0[1]) - shoulder;
-                let q = kinematics::inverse(params, hand, Elbow::Down)?;
-                let elbow = shoulder + kinematics::elbow(params, q);
-                let link =
-                    |origin: Vector2<f64>, angle: f64, seg: &rigtwin_arm::params::Segment| {
-                        RigidBodyBuilder::dynamic()
-                            .translation(Vector::new(origin.x, origin.y))
-                            .rotation(angle)
-                            .additional_mass_properties(MassProperties::new(
-                                Vector::new(seg.com_m, 0.0),
-                                seg.mass_kg,
-                                seg.inertia_kg_m2,
-                            ))
-                            .can_sleep(false)
-                    };
-                let ub = world.bodies.insert(link(shoulder, q[0], &params.upper));
-                let fb = world.bodies.insert(link(elbow, q[0] + q[1], &params.fore));
-                world.impulse_joints.insert(
-                    base,
-                    ub,
-                    RevoluteJointBuilder::new().local_anchor1(Vector::new(shoulder.x, shoulder.y)),
-                    true,
-                );
-                world.impulse_joints.insert(
-                    ub,
-                    fb,
-                    RevoluteJointBuilder::new()
-                        .local_anchor1(Vector::new(params.upper.length_m, 0.0)),
-                    true,
-                );
-                let grip = cfg.effects.grip_compliance;
-                let pin = if *grasp == Grasp::Held && grip.is_none() {
-                    Some(
-                        world.impulse_joints.insert(
-                            fb,
-                            handle,
-                            RevoluteJointBuilder::new()
-                                .local_anchor1(Vector::new(params.fore.length_m, 0.0)),
-                            true,
-                        ),
-                    )
-                } else {
-                    None
-                };
-                arm = Some(ArmLinks {
-                    params: params.clone(),
-                    shoulder_m: shoulder,
-                    upper: ub,
-                    fore: fb,
-                    pin,
-                    grip: if *grasp == Grasp::Held { grip } else { None },
-                    q,
-                    torque_nm: [0.0; 2],
-                });
+                let effect = cfg.effects.grip_compliance;
+                arm = Some(attach_arm(
+                    &mut world,
+                    &c,
+                    p0,
+                    *shoulder_m,
+                    params,
+                    *grasp,
+                    effect,
+                )?);
             }
             Attachment::SpringMass {
                 mass_kg,
                 stiffness_n_per_m,
             } => {
-                // A compact block: radius of gyration 3 cm.
-                let body = world
-                    .bodies
-                    .insert(dynamic(p0, *mass_kg, mass_kg * 0.03 * 0.03));
-                world
-                    .impulse_joints
-                    .insert(handle, body, RevoluteJointBuilder::new(), true);
-                spring_mass = Some(SpringMass {
-                    body,
-                    stiffness_n_per_m: *stiffness_n_per_m,
-                    rest_m: p0,
-                });
+                spring_mass = Some(attach_spring_mass(
+                    &mut world,
+                    c.handle,
+                    p0,
+                    *mass_kg,
+                    *stiffness_n_per_m,
+                ));
             }
             Attachment::None => {}
         }
-
         let stops = [
             RailStops::new(
                 0,
@@ -336,10 +400,10 @@ impl SimRig {
         let motor_noise = MotorNoise::new(&cfg.nuisance, TICK_S, &mut rng);
         let mut rig = SimRig {
             world,
-            lower,
-            upper,
-            handle,
-            sensor_joint,
+            lower: c.lower,
+            upper: c.upper,
+            handle: c.handle,
+            sensor_joint: c.sensor_joint,
             arm,
             spring_mass,
             stops,
