@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 
-use super::{Report, seed000, seed001};
+use super::{HoldSummary, PiovesanSummary, Report, Safety, Workspace, seed000, seed001};
 
 /// A table whose columns are padded to their widest cell; rendered as Markdown, which
 /// reads as an aligned table in a terminal too.
@@ -86,6 +86,33 @@ pub fn summary_text(r: &Report) -> String {
         r.protocol, r.kind, r.seed, r.subjects, r.trials_per_subject, r.perturbed_per_subject
     );
     let mut t = Table::new(&["quantity", "value", "limit / seed", "ok"]);
+    overview_rows(&mut t, r);
+    safety_rows(&mut t, &r.safety);
+    workspace_row(&mut t, &r.workspace);
+    seed000_rows(&mut t, r);
+    if let Some(h) = &r.hold {
+        hold_rows(&mut t, h);
+    }
+    out.push_str(&t.render());
+    if !r.parameters.is_empty() {
+        out.push_str(&impedance_text(r));
+    }
+    for e in &r.estimates {
+        if let Some(err) = &e.error {
+            let _ = writeln!(out, "estimator failed for {}: {err}", e.subject);
+        }
+    }
+    if let Some(pv) = &r.piovesan {
+        out.push_str(&piovesan_text(pv));
+    }
+    if !r.timing.is_empty() {
+        out.push_str(&timing_text(&r.timing));
+    }
+    out
+}
+
+/// Session length, and simulated against wall time.
+fn overview_rows(t: &mut Table, r: &Report) {
     t.row(vec![
         "session length (trial time)".into(),
         format!(
@@ -102,7 +129,10 @@ pub fn summary_text(r: &Report) -> String {
         format!("{:.0}x real time on {} job(s)", r.real_time_factor, r.jobs),
         String::new(),
     ]);
-    let s = &r.safety;
+}
+
+/// Peak force, command and speed against their limits, and the trips.
+fn safety_rows(t: &mut Table, s: &Safety) {
     t.row(vec![
         "peak hand force".into(),
         format!("{:.1} N", s.peak_force_n),
@@ -132,7 +162,10 @@ pub fn summary_text(r: &Report) -> String {
         "0".into(),
         yes(s.trips.is_empty()).into(),
     ]);
-    let w = &r.workspace;
+}
+
+/// How far the handle went against the walls.
+fn workspace_row(t: &mut Table, w: &Workspace) {
     t.row(vec![
         "workspace: peak |x| / |y|".into(),
         format!(
@@ -147,6 +180,10 @@ pub fn summary_text(r: &Report) -> String {
         ),
         yes(w.suffices).into(),
     ]);
+}
+
+/// The 000_* figures: deviations at 150 ms and the NRMSE of the perturbation response.
+fn seed000_rows(t: &mut Table, r: &Report) {
     if let Some([dx, dy]) = &r.deviation_mm {
         for (name, m, (sm, ss)) in [
             ("max deviation x, 150 ms", dx, seed000::DEV_X_MM),
@@ -180,141 +217,141 @@ pub fn summary_text(r: &Report) -> String {
             ]);
         }
     }
-    if let Some(h) = &r.hold {
+}
+
+/// The 001_* position perturbations.
+fn hold_rows(t: &mut Table, h: &HoldSummary) {
+    t.row(vec![
+        "position perturbations".into(),
+        format!("{}", h.pushes),
+        String::new(),
+        String::new(),
+    ]);
+    t.row(vec![
+        "|x − anchor| x / y, window".into(),
+        format!(
+            "{} / {} mm",
+            ms(&h.deviation_x_mm, 2),
+            ms(&h.deviation_y_mm, 2)
+        ),
+        format!("001_*: 8 mm pushes"),
+        String::new(),
+    ]);
+}
+
+/// The Börner estimates against ground truth and 000_* Table 1.
+fn impedance_text(r: &Report) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\nInvoluntary impedance (Börner, M_BSP = arm endpoint inertia) vs ground truth vs 000_* Table 1"
+    );
+    let mut t = Table::new(&[
+        "param",
+        "estimate",
+        "± s.e.",
+        "truth (intrinsic)",
+        "bias",
+        "Table 1",
+        "within 1 std",
+    ]);
+    for p in &r.parameters {
+        let inside = (p.estimate.mean - p.table1.0).abs() <= p.table1.1;
         t.row(vec![
-            "position perturbations".into(),
-            format!("{}", h.pushes),
-            String::new(),
-            String::new(),
-        ]);
-        t.row(vec![
-            "|x − anchor| x / y, window".into(),
-            format!(
-                "{} / {} mm",
-                ms(&h.deviation_x_mm, 2),
-                ms(&h.deviation_y_mm, 2)
-            ),
-            format!("001_*: 8 mm pushes"),
-            String::new(),
+            format!("{} [{}]", p.name, p.unit),
+            format!("{:.2}", p.estimate.mean),
+            format!("{:.2}", p.std_err),
+            format!("{:.2}", p.truth.mean),
+            if p.bias.n > 1 {
+                ms(&p.bias, 2)
+            } else {
+                format!("{:.2}", p.bias.mean)
+            },
+            format!("{:.2} ({:.2})", p.table1.0, p.table1.1),
+            yes(inside).into(),
         ]);
     }
     out.push_str(&t.render());
-    if !r.parameters.is_empty() {
+    if r.subjects > 1 {
         let _ = writeln!(
             out,
-            "\nInvoluntary impedance (Börner, M_BSP = arm endpoint inertia) vs ground truth vs 000_* Table 1"
+            "(estimate, truth and bias are mean (std) over {} subjects)",
+            r.subjects
         );
-        let mut t = Table::new(&[
-            "param",
-            "estimate",
-            "± s.e.",
-            "truth (intrinsic)",
-            "bias",
-            "Table 1",
-            "within 1 std",
-        ]);
-        for p in &r.parameters {
-            let inside = (p.estimate.mean - p.table1.0).abs() <= p.table1.1;
+    }
+    out
+}
+
+/// The windowed regression (001_*) against the known stiffness.
+fn piovesan_text(pv: &PiovesanSummary) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "\nWindowed regression (Piovesan, 10-cycle windows), {} windows, M̂ = [[{:.2}, {:.2}], [{:.2}, {:.2}]] kg",
+        pv.windows, pv.m_hat_kg[0][0], pv.m_hat_kg[0][1], pv.m_hat_kg[1][0], pv.m_hat_kg[1][1]
+    );
+    let mut t = Table::new(&["param", "mean (std over windows)", "seed / known", "ok"]);
+    let names = [["K11", "K12"], ["K21", "K22"]];
+    for (i, row_names) in names.iter().enumerate() {
+        for (j, name) in row_names.iter().enumerate() {
+            let (known, ok) = match (pv.k_true_n_per_m, pv.k_rel_error) {
+                (Some(k), Some(e)) if i == j => (
+                    format!(
+                        "{} N/m (App. B: within {:.1} %)",
+                        k[i],
+                        seed001::K_TOLERANCE * 100.0
+                    ),
+                    yes(e[i].abs() <= seed001::K_TOLERANCE).to_owned(),
+                ),
+                (Some(_), _) => ("0 N/m".to_owned(), String::new()),
+                _ => (String::new(), String::new()),
+            };
             t.row(vec![
-                format!("{} [{}]", p.name, p.unit),
-                format!("{:.2}", p.estimate.mean),
-                format!("{:.2}", p.std_err),
-                format!("{:.2}", p.truth.mean),
-                if p.bias.n > 1 {
-                    ms(&p.bias, 2)
-                } else {
-                    format!("{:.2}", p.bias.mean)
-                },
-                format!("{:.2} ({:.2})", p.table1.0, p.table1.1),
-                yes(inside).into(),
+                format!("{name} [N/m]"),
+                ms(&pv.k_n_per_m[i][j], 1),
+                known,
+                ok,
             ]);
         }
-        out.push_str(&t.render());
-        if r.subjects > 1 {
-            let _ = writeln!(
-                out,
-                "(estimate, truth and bias are mean (std) over {} subjects)",
-                r.subjects
-            );
+    }
+    for i in 0..2 {
+        for j in 0..2 {
+            t.row(vec![
+                format!("B{}{} [N s/m]", i + 1, j + 1),
+                ms(&pv.b_ns_per_m[i][j], 2),
+                String::new(),
+                String::new(),
+            ]);
         }
     }
-    for e in &r.estimates {
-        if let Some(err) = &e.error {
-            let _ = writeln!(out, "estimator failed for {}: {err}", e.subject);
-        }
-    }
-    if let Some(pv) = &r.piovesan {
-        let _ = writeln!(
-            out,
-            "\nWindowed regression (Piovesan, 10-cycle windows), {} windows, M̂ = [[{:.2}, {:.2}], [{:.2}, {:.2}]] kg",
-            pv.windows, pv.m_hat_kg[0][0], pv.m_hat_kg[0][1], pv.m_hat_kg[1][0], pv.m_hat_kg[1][1]
-        );
-        let mut t = Table::new(&["param", "mean (std over windows)", "seed / known", "ok"]);
-        let names = [["K11", "K12"], ["K21", "K22"]];
-        for (i, row_names) in names.iter().enumerate() {
-            for (j, name) in row_names.iter().enumerate() {
-                let (known, ok) = match (pv.k_true_n_per_m, pv.k_rel_error) {
-                    (Some(k), Some(e)) if i == j => (
-                        format!(
-                            "{} N/m (App. B: within {:.1} %)",
-                            k[i],
-                            seed001::K_TOLERANCE * 100.0
-                        ),
-                        yes(e[i].abs() <= seed001::K_TOLERANCE).to_owned(),
-                    ),
-                    (Some(_), _) => ("0 N/m".to_owned(), String::new()),
-                    _ => (String::new(), String::new()),
-                };
-                t.row(vec![
-                    format!("{name} [N/m]"),
-                    ms(&pv.k_n_per_m[i][j], 1),
-                    known,
-                    ok,
-                ]);
-            }
-        }
-        for i in 0..2 {
-            for j in 0..2 {
-                t.row(vec![
-                    format!("B{}{} [N s/m]", i + 1, j + 1),
-                    ms(&pv.b_ns_per_m[i][j], 2),
-                    String::new(),
-                    String::new(),
-                ]);
-            }
-        }
-        let r2_seed = if pv.k_true_n_per_m.is_some() {
-            format!("App. B: {}", seed001::R2)
-        } else {
-            "001_*: 0.80 (subjects)".to_owned()
-        };
+    let r2_seed = if pv.k_true_n_per_m.is_some() {
+        format!("App. B: {}", seed001::R2)
+    } else {
+        "001_*: 0.80 (subjects)".to_owned()
+    };
+    t.row(vec![
+        "canonical r²".into(),
+        ms(&pv.r2, 3),
+        r2_seed,
+        String::new(),
+    ]);
+    if let (Some(e), Some(d)) = (pv.k_rel_error, pv.k_max_rel_drift) {
         t.row(vec![
-            "canonical r²".into(),
-            ms(&pv.r2, 3),
-            r2_seed,
+            "K11 / K22 error of the mean".into(),
+            format!("{:+.2} / {:+.2} %", e[0] * 100.0, e[1] * 100.0),
+            String::new(),
             String::new(),
         ]);
-        if let (Some(e), Some(d)) = (pv.k_rel_error, pv.k_max_rel_drift) {
-            t.row(vec![
-                "K11 / K22 error of the mean".into(),
-                format!("{:+.2} / {:+.2} %", e[0] * 100.0, e[1] * 100.0),
-                String::new(),
-                String::new(),
-            ]);
-            t.row(vec![
-                "largest window drift K11 / K22".into(),
-                format!("{:.2} / {:.2} %", d[0] * 100.0, d[1] * 100.0),
-                format!("App. B: ±{:.1} %", seed001::K_TOLERANCE * 100.0),
-                yes(d[0] <= seed001::K_TOLERANCE && d[1] <= seed001::K_TOLERANCE).into(),
-            ]);
-        }
-        out.push_str(&t.render());
-        for e in &pv.errors {
-            let _ = writeln!(out, "windowed regression failed: {e}");
-        }
+        t.row(vec![
+            "largest window drift K11 / K22".into(),
+            format!("{:.2} / {:.2} %", d[0] * 100.0, d[1] * 100.0),
+            format!("App. B: ±{:.1} %", seed001::K_TOLERANCE * 100.0),
+            yes(d[0] <= seed001::K_TOLERANCE && d[1] <= seed001::K_TOLERANCE).into(),
+        ]);
     }
-    if !r.timing.is_empty() {
-        out.push_str(&timing_text(&r.timing));
+    out.push_str(&t.render());
+    for e in &pv.errors {
+        let _ = writeln!(out, "windowed regression failed: {e}");
     }
     out
 }
