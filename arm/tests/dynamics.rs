@@ -9,6 +9,7 @@ use rigtwin_arm::dynamics::{
     JointState, coriolis, forward_dynamics, inverse_dynamics, kinetic_energy, mass_matrix, rk4_step,
 };
 use rigtwin_arm::params::{ArmParams, Segment};
+use rigtwin_arm::time::TICK_HZ;
 
 /// Kinetic energy summed link by link (translation of each CoM plus rotation), written
 /// without the mass matrix.
@@ -94,7 +95,7 @@ fn free_arm_conserves_energy_and_shoulder_momentum_under_rk4() {
         q: [0.4, 1.6],
         qd: [3.0, -5.0],
     };
-    let s1 = free_run(&p, s0, 0.25e-3, 8000);
+    let s1 = free_run(&p, s0, 1.0 / TICK_HZ as f64, 2 * TICK_HZ as usize);
     let e0 = kinetic_energy(&p, &s0);
     let e1 = kinetic_energy(&p, &s1);
     assert_relative_eq!(e1, e0, max_relative = 1e-9);

@@ -15,8 +15,10 @@ use rigtwin_arm::human::{Admittance, HoldTask, Human, HumanConfig, ReachTask, Ta
 use rigtwin_arm::kinematics::{forward, jacobian};
 use rigtwin_arm::muscles::MuscleParams;
 use rigtwin_arm::params::{ArmParams, StiffnessDrift, StretchReflex};
+use rigtwin_arm::time::TICK_HZ;
 
-const DT: f64 = 1.0 / 4000.0;
+/// The control tick, s.
+const DT: f64 = 1.0 / TICK_HZ as f64;
 
 /// 000_* section 4: shoulder-frame (0, 0.30) → (0, 0.55) m in 3 s; with the default
 /// shoulder at rig (0, −0.425) that is rig (0, −0.125) → (0, 0.125).

@@ -13,8 +13,10 @@ use rand_chacha::ChaCha8Rng;
 use rigtwin_arm::human::{Admittance, Human, HumanConfig, ReachTask, Task};
 use rigtwin_arm::kinematics::forward;
 use rigtwin_arm::params::ArmParams;
+use rigtwin_arm::time::TICK_HZ;
 
-const DT: f64 = 1.0 / 4000.0;
+/// The control tick, s.
+const DT: f64 = 1.0 / TICK_HZ as f64;
 /// 150 ms in ticks.
 const T_PERT: u64 = 600;
 

@@ -4,6 +4,7 @@
 use approx::assert_abs_diff_eq;
 use nalgebra::Vector2;
 use rigtwin_arm::plan::MinJerk;
+use rigtwin_arm::time::TICK_HZ;
 
 fn borner() -> MinJerk {
     MinJerk::new(
@@ -52,7 +53,7 @@ fn midpoint_speed_is_the_closed_form_peak() {
 #[test]
 fn derivatives_match_central_differences() {
     let p = borner();
-    let h = 1.0 / 4000.0;
+    let h = 1.0 / TICK_HZ as f64;
     for tick in (500..12_300).step_by(397) {
         let (a, b, c) = (p.at(tick - 1), p.at(tick), p.at(tick + 1));
         assert!(((c.pos_m - a.pos_m) / (2.0 * h) - b.vel_m_s).norm() < 1e-7);

@@ -165,7 +165,7 @@ mod tests {
     #[test]
     fn starts_and_ends_at_rest() {
         let m = ImposedMotion::new(&ImposedMotionConfig::default(), Rate::CONTROL);
-        let end = (m.duration_s() * 4000.0).round() as u64;
+        let end = (m.duration_s() * f64::from(Rate::CONTROL.hz())).round() as u64;
         for k in [0, end] {
             let s = m.at(k);
             // Envelope and its derivatives vanish at the ends exactly, up to rounding.

@@ -66,9 +66,10 @@ mod tests {
 
     #[test]
     fn tick_seconds_is_exact_for_whole_periods() {
-        // 4000 ticks at 4 kHz is exactly one second: integer time must not drift.
-        assert_eq!(Tick(4000).seconds(Rate::CONTROL), 1.0);
-        assert_eq!(Tick(4_000_000).seconds(Rate::CONTROL), 1000.0);
+        // One second of ticks is exactly one second: integer time must not drift.
+        let hz = u64::from(Rate::CONTROL.hz());
+        assert_eq!(Tick(hz).seconds(Rate::CONTROL), 1.0);
+        assert_eq!(Tick(1000 * hz).seconds(Rate::CONTROL), 1000.0);
     }
 
     #[test]

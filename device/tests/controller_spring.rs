@@ -48,7 +48,8 @@ fn run_step(mass: f64, k: f64, b: f64) -> f64 {
     c.activate().unwrap();
     let h = Rate::CONTROL.period_s();
     let mut worst = 0.0_f64;
-    for n in 1..=4000u64 {
+    // One second of ticks.
+    for n in 1..=u64::from(Rate::CONTROL.hz()) {
         let r = c.tick(&mut rig, Tick(n));
         for i in 0..2 {
             let x = analytic(mass, k, b, force[i], (n - 1) as f64 * h);

@@ -157,11 +157,12 @@ fn one_count_of_motion_within_the_stall_time_resets_it() {
     // no 80 readings in a row are still, so 4000 ticks (1 s) at the 200 N limit do not
     // trip. One count every 81 ticks leaves 80 still readings: that trips. The encoder
     // speed (1 µm per 20 ms) is far below the velocity limit.
+    let one_second = u64::from(Rate::CONTROL.hz());
     for (axis, sign) in SIDES {
         let step = |every: u64| move |n: u64| (sign as i64) * (n / every) as i64;
-        let (_, trip) = dead_encoder(axis, sign, step(80), 4000);
+        let (_, trip) = dead_encoder(axis, sign, step(80), one_second);
         assert_eq!(trip, None, "axis {axis} sign {sign}");
-        let (_, trip) = dead_encoder(axis, sign, step(81), 4000);
+        let (_, trip) = dead_encoder(axis, sign, step(81), one_second);
         assert!(
             matches!(trip, Some((_, TripReason::EncoderStall { axis: a, ticks: 80, .. }, _)) if a == axis),
             "axis {axis} sign {sign}: {trip:?}"

@@ -123,7 +123,8 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
     // The controller's session: one whole trial at the recording rate, with its clock.
     let protocol = rigtwin::protocol::Protocol::builtin("reach-perturb").unwrap();
     let n_ticks = rigtwin::rehearse::trial::trial_ticks(&protocol);
-    let rows = (n_ticks / (4000 / u64::from(protocol.recording.rate_hz))) as usize;
+    let div = rigtwin::rehearse::TICK_HZ / u64::from(protocol.recording.rate_hz);
+    let rows = (n_ticks / div) as usize;
     let s = Session::read(&ctl_dir).unwrap();
     let timing = s.manifest.timing.expect("the controller's [timing]");
     assert!(
@@ -140,7 +141,7 @@ fn plant_serve_and_controller_run_a_reach_over_udp() {
         serde_json::from_str(&std::fs::read_to_string(ctl_dir.join("controller.json")).unwrap())
             .unwrap();
     let t1 = &report["trials"][0];
-    let div = 4000 / protocol.recording.rate_hz as usize;
+    let div = div as usize;
     let row_of = |key: &str| t1[key].as_u64().map_or(rows, |k| k as usize / div);
     // Until the first missed deadline (or a trip) of the controller, and the plant's
     // first stall, nothing was held longer than a tick: what follows holds there

@@ -272,7 +272,7 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
         .map(|t| t.len())
         .sum::<usize>();
     let rate = session.manifest.rate_hz;
-    let onset_row = (truth.tick as f64 * rate / 4000.0).floor() as usize;
+    let onset_row = (truth.tick as f64 * rate / rehearse::TICK_HZ as f64).floor() as usize;
     for row in [onset_row, onset_row + 50] {
         let fresh = sim.rows[row].activations_n();
         let logged = &activations[first + row];
@@ -505,10 +505,11 @@ fn a_real_time_rehearsal_puts_its_clock_on_the_timeline() {
     assert_eq!(held.len(), samples);
     assert!(wake.iter().all(|r| r.len() == 1 && r[0] >= 0.0), "{wake:?}");
     let (last, before) = wake.split_last().unwrap();
+    let period_us = rigtwin_device::Rate::CONTROL.period_s() * 1e6;
     let over: Vec<f64> = before
         .iter()
         .map(|r| r[0])
-        .filter(|&us| us >= 250.0)
+        .filter(|&us| us >= period_us)
         .collect();
     assert!(over.is_empty(), "latencies of a period or more: {over:?}");
     assert!(last[0].is_finite());

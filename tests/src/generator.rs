@@ -45,8 +45,8 @@ pub const EFFECTS: [&str; EffectKind::ALL.len() + 1] = {
     out
 };
 
-/// The 4 kHz control tick, s (the world rounds delays to whole ticks).
-const TICK_S: f64 = 2.5e-4;
+/// The control tick, s (the world rounds delays to whole ticks).
+const TICK_S: f64 = rigtwin_world::TICK_S;
 
 /// Effects outside the diagnosis's catalog a generated session may hide ([`draw`]): a
 /// diagnosis must not name a catalog effect for them but report the residual as

@@ -48,7 +48,8 @@ fn a_real_time_rehearsal_keeps_every_sample_and_reports_its_clock() {
         2 * trial_ticks,
         "{timing:?}"
     );
-    assert!((timing.period_us - 250.0).abs() < 1e-9);
+    let period_us = rigtwin_device::Rate::CONTROL.period_s() * 1e6;
+    assert!((timing.period_us - period_us).abs() < 1e-9);
     assert!(timing.wake_latency.p50_us <= timing.wake_latency.p99_us);
     assert!(timing.wake_latency.p99_us <= timing.wake_latency.max_us);
     assert!(timing.loop_time.max_us > 0.0);

@@ -18,13 +18,18 @@ use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options, TrialTask, trial};
 use rigtwin::replay::{Interpolation, ReplayRig};
 use rigtwin::session::Session;
-use rigtwin_device::Tick;
+use rigtwin_device::{Rate, Tick};
 
 #[test]
 fn the_controller_replayed_on_its_own_session_writes_the_recorded_commands() {
     let tmp = tempfile::tempdir().unwrap();
     let text = include_str!("../../hil/protocols/reach-perturb.toml");
-    let at_4k = text.replacen("rate_hz = 1000 ", "rate_hz = 4000 ", 1);
+    // Recorded at the control rate: one row per tick.
+    let at_4k = text.replacen(
+        "rate_hz = 1000 ",
+        &format!("rate_hz = {} ", Rate::CONTROL.hz()),
+        1,
+    );
     assert_ne!(text, at_4k, "the shipped protocol records at 1000 Hz");
     let path = tmp.path().join("reach-4k.toml");
     std::fs::write(&path, at_4k).unwrap();
@@ -47,8 +52,12 @@ fn the_controller_replayed_on_its_own_session_writes_the_recorded_commands() {
         if matches!(plan.task, TrialTask::Reach { angle_deg: Some(_) }) {
             perturbed += 1;
         }
-        let mut replay =
-            ReplayRig::at_control_rate(table, 4000.0, Interpolation::SampleAndHold).unwrap();
+        let mut replay = ReplayRig::at_control_rate(
+            table,
+            f64::from(Rate::CONTROL.hz()),
+            Interpolation::SampleAndHold,
+        )
+        .unwrap();
         let mut parts = trial::controller_parts(&protocol, subject, 42, plan, true).unwrap();
         let recorded = (
             table.cmd_fx_n.as_ref().unwrap(),

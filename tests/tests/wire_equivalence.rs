@@ -8,7 +8,7 @@ use rigtwin::cosim::wired::WiredPlant;
 use rigtwin::cosim::{self, CoSim, LockStep};
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{schedule, trial};
-use rigtwin_device::{Mode, Tick};
+use rigtwin_device::{Mode, Rate, Tick};
 use rigtwin_wire::{
     ChannelEnd, FaultInjector, FaultSpec, Faulty, PlantEnd, PlantLimits, RigLimits, WireRig,
     channel_pair,
@@ -83,11 +83,12 @@ fn a_stalled_link_trips_the_controller_within_the_watchdog() {
             break;
         }
     }
-    // The stall starts at tick 4000 (1 s); frames of ticks 4000.. never arrive, so the
-    // newest frame is 3999's and the 4th tick after it, 4003, is stale.
+    // The stall starts at 1 s, tick 4000 at 4 kHz; frames of ticks 4000.. never arrive,
+    // so the newest frame is 3999's and the 4th tick after it, 4003, is stale.
+    let stall_tick = u64::from(Rate::CONTROL.hz());
     assert_eq!(
         fault_at,
-        Some(4003),
+        Some(stall_tick + 3),
         "{:?}",
         sim.controller().events().last()
     );

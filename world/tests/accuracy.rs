@@ -10,8 +10,12 @@ use std::f64::consts::PI;
 use nalgebra::{Matrix2, Vector2};
 use rigtwin_arm::dynamics::{JointState, inverse_dynamics, rk4_step};
 use rigtwin_arm::kinematics::{self, Elbow};
+use rigtwin_device::Rate;
 use rigtwin_world::config::{Attachment, Grasp, RigConfig};
 use rigtwin_world::{ReducedPlant, SimRig, TICK_S};
+
+/// Control ticks per second.
+const TICKS_PER_S: u64 = Rate::CONTROL.hz() as u64;
 
 /// Max joint-angle error of the released arm over 1 s against RK4 at a tenth of the tick.
 fn free_arm_error(substeps: usize) -> f64 {
@@ -21,7 +25,7 @@ fn free_arm_error(substeps: usize) -> f64 {
     let params = rig.arm_params().unwrap().0.clone();
     let mut reference: JointState = rig.arm_state().unwrap();
     let mut max_err = 0.0f64;
-    for k in 0..4000 {
+    for k in 0..TICKS_PER_S {
         let t = k as f64 * TICK_S;
         let tau = [0.8 * (2.0 * PI * t).sin(), 0.4 * (3.0 * PI * t).cos()];
         rig.set_arm_torques(tau).unwrap();
@@ -75,7 +79,7 @@ fn sensor_during_a_reach_equals_inverse_dynamics_through_the_jacobian_plus_handl
     let (kp, kd) = ([4.0e5, 1.5e5], [4.5e3, 1.6e3]);
     let mut measured = Vec::new();
     let mut predicted = Vec::new();
-    for k in 0..(4000 * 3 / 4) {
+    for k in 0..(TICKS_PER_S * 3 / 4) {
         let t = k as f64 * TICK_S;
         // The arm's own plan, 0.5 s, and its inverse dynamics.
         let (ha, hv, hacc) = common::min_jerk(start, arm_goal, 0.5, t);
@@ -92,7 +96,7 @@ fn sensor_during_a_reach_equals_inverse_dynamics_through_the_jacobian_plus_handl
         ];
         rigtwin_device::RigIo::write(
             &mut rig,
-            rigtwin_device::Tick(k as u64),
+            rigtwin_device::Tick(k),
             rigtwin_device::MotorCommand { force_n: f },
         )
         .unwrap();
@@ -165,9 +169,13 @@ fn calibration_rig_oscillates_at_sqrt_k_over_m_total() {
     let m_total = [m[0] + m_s, m[1] + m_s];
     let k = [615.0, 507.0];
     let mut xs = [Vec::new(), Vec::new()];
-    for tick in 0..(4000 * 8) {
+    for tick in 0..(TICKS_PER_S * 8) {
         // A 10 ms push on both axes, then free oscillation.
-        let f = if tick < 40 { [30.0, 30.0] } else { [0.0, 0.0] };
+        let f = if tick < TICKS_PER_S / 100 {
+            [30.0, 30.0]
+        } else {
+            [0.0, 0.0]
+        };
         rigtwin_device::RigIo::write(
             &mut rig,
             rigtwin_device::Tick(tick),

@@ -264,7 +264,8 @@ mod tests {
     #[test]
     fn block_centre_clock() {
         // Blocks of 4 ticks: tick 1.5 is the centre of the first block, t = 0.
-        assert!((tick_time_s(1003, 4) - 1001.5 / 4000.0).abs() < 1e-15);
-        assert_eq!(tick_time_s(7, 1), 7.0 / 4000.0);
+        let hz = f64::from(rigtwin_device::Rate::CONTROL.hz());
+        assert!((tick_time_s(1003, 4) - 1001.5 / hz).abs() < 1e-15);
+        assert_eq!(tick_time_s(7, 1), 7.0 / hz);
     }
 }
