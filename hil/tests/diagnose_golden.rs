@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "fcfb897f6e34e836b4bcac6c7f15bb4d86efc6056fafa3a99f58bf24679f3342",
+        "86ae7617a6ab214dc56f44693e8c372ec511b30ae798f4a8c1608110e2d516ac",
     ),
     (
         "example-friction",
-        "958414f8728492b402c074203b9c9312b98657464d04c8b22a90e060a4981cd0",
+        "907567b6fbb07427740f1fa1901be1cbd9d648588a6485f32321fa4a77a7aed7",
     ),
     (
         "example-nuisance",
-        "be1b25070daec06faca9907a2961bfe2ad752d9c30a11f97f8340683f4e0b360",
+        "01e41de0e7fd7c3c5131db9b9c3db373ade7b2e0517abc4bb1268a20c5d4b75d",
     ),
     (
         "example-rotation-mass",
-        "bad1828052394c7254cd0f90484103a6aaf0a147dac6c59e46b01ad62d5d1482",
+        "47a975c3fddf8f394920f7ad8b676374be4b5627cbf18d9a7be2d35589a5f339",
     ),
 ];
 

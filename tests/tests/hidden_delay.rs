@@ -13,7 +13,7 @@
 //! floor; 1.43 where the 0.75 ms delay adds little over it; 0.90–1.45 with free gains),
 //! held-out gains 0.12–0.42; `sweep_delay_gain` prints the
 //! gains. How the delay became identifiable at all (the balance filter, the
-//! one-tick nominal latency) is in `hil/src/discrepancy/signals.rs`.
+//! one-tick nominal latency) is in `hil/diagnose/src/signals.rs`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::{Path, PathBuf};

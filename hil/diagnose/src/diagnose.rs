@@ -1587,12 +1587,12 @@ fn decide(
                  exceeds the critical t at alpha {} / {judged} candidates = {:.4} (cart balance: df {plant_df}, t {plant_t:.2}{}) \
                  and its held-out gain is at least {:.0} %, and it passes the physical checks: physical signs, \
                  parameters material in newtons (at least {} N of force over the session, or the table of \
-                 hil/src/discrepancy/decide.rs), not at the edge of their search range, and for friction and ripple \
+                 hil/diagnose/src/decide.rs), not at the edge of their search range, and for friction and ripple \
                  a fitted law that explains at least {:.0} % of its binned partial residual. On the cart \
                  balance effects are selected forward: the best passing candidate is named, then each \
                  other one is fitted jointly with the named ones and judged against them alone by the \
                  same rules, until none passes; on the hand balance the best passing candidate is named. \
-                 Laws outside the catalog (the library of hil/src/discrepancy/unexplained.rs) compete on the \
+                 Laws outside the catalog (the library of hil/diagnose/src/unexplained.rs) compete on the \
                  cart balance: a cause they explain better and to which it adds nothing given them is \
                  rejected, and what they still explain given the causes is reported as unexplained",
                 opts.alpha,
