@@ -76,7 +76,7 @@ pub struct ControllerConfig {
 impl Default for ControllerConfig {
     fn default() -> Self {
         ControllerConfig {
-            control_rate_hz: 4000,
+            control_rate_hz: Rate::CONTROL.hz(),
             motor_rate_hz: 2000,
             law: LawKind::Admittance,
             sensors: SensorConfig::default(),

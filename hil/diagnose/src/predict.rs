@@ -33,44 +33,56 @@ impl Analysis {
     /// # Errors
     /// A signal-processing error while forming a residual.
     pub fn held_out(&self) -> Result<Vec<HeldOut>, DiscrepancyError> {
-        let (Some(base), Some(folds)) = (&self.baseline, &self.folds) else {
-            return Ok(Vec::new());
-        };
         let mut out = Vec::with_capacity(self.signals.len());
-        for (sig, &fold) in self.signals.iter().zip(&folds.of_trial) {
-            let Some(bf) = base.folds.get(fold) else {
-                continue;
-            };
-            let command_n = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
-            let predicted = |residual: [Vec<f64>; 2]| {
-                [0, 1].map(|axis| {
-                    command_n[axis]
-                        .iter()
-                        .zip(&residual[axis])
-                        .map(|(u, r)| u - r)
-                        .collect::<Vec<f64>>()
-                })
-            };
-            let mut models = vec![(
-                "baseline",
-                predicted(Baseline.residual(sig, 0, &bf.beta, self.latency_s)?),
-            )];
-            for cf in &self.fits {
-                if let Some(f) = cf.fit.folds.get(fold) {
-                    let r = cf
-                        .candidate
-                        .residual(sig, f.setting, &f.beta, self.latency_s)?;
-                    models.push((cf.candidate.name(), predicted(r)));
-                }
-            }
-            out.push(HeldOut {
-                id: sig.id,
-                fold,
-                rows: sig.rows.clone(),
-                command_n,
-                models,
-            });
+        for i in 0..self.signals.len() {
+            out.extend(self.held_out_trial(i)?);
         }
         Ok(out)
+    }
+
+    /// The held-out predictions of the `i`-th trial of [`Analysis::signals`] (`None`
+    /// without the cart balance, or past the last trial).
+    ///
+    /// # Errors
+    /// A signal-processing error while forming a residual.
+    pub fn held_out_trial(&self, i: usize) -> Result<Option<HeldOut>, DiscrepancyError> {
+        let (Some(base), Some(folds)) = (&self.baseline, &self.folds) else {
+            return Ok(None);
+        };
+        let (Some(sig), Some(&fold)) = (self.signals.get(i), folds.of_trial.get(i)) else {
+            return Ok(None);
+        };
+        let Some(bf) = base.folds.get(fold) else {
+            return Ok(None);
+        };
+        let command_n = [sig.at_rows(&sig.u[0]), sig.at_rows(&sig.u[1])];
+        let predicted = |residual: [Vec<f64>; 2]| {
+            [0, 1].map(|axis| {
+                command_n[axis]
+                    .iter()
+                    .zip(&residual[axis])
+                    .map(|(u, r)| u - r)
+                    .collect::<Vec<f64>>()
+            })
+        };
+        let mut models = vec![(
+            "baseline",
+            predicted(Baseline.residual(sig, 0, &bf.beta, self.latency_s)?),
+        )];
+        for cf in &self.fits {
+            if let Some(f) = cf.fit.folds.get(fold) {
+                let r = cf
+                    .candidate
+                    .residual(sig, f.setting, &f.beta, self.latency_s)?;
+                models.push((cf.candidate.name(), predicted(r)));
+            }
+        }
+        Ok(Some(HeldOut {
+            id: sig.id,
+            fold,
+            rows: sig.rows.clone(),
+            command_n,
+            models,
+        }))
     }
 }

@@ -7,7 +7,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::candidate::{Baseline, Candidate as _};
-use super::crossval::Folds;
 use super::diagnose::{Analysis, CandidateFit, Diagnosis, Ranked};
 use super::error::DiscrepancyError;
 use super::hand::{GRIP_TIME_S, HandBaseline, HandFit, HandJudgement, hand_fit_rows};
@@ -448,10 +447,9 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
 /// axis): measured motor
 /// command against what the baseline and the extended model say it must have been.
 fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, DiscrepancyError> {
-    let Some(base) = &a.baseline else {
+    let Some(folds) = &a.folds else {
         return Ok(None);
     };
-    let folds = Folds::interleaved(a.signals.len(), a.diagnosis.folds);
     let held: Vec<usize> = (0..a.signals.len())
         .filter(|i| folds.of_trial.get(*i) == Some(&0))
         .collect();
@@ -463,23 +461,23 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
         return Ok(None);
     };
     let sig = &a.signals[ti];
-    let (Some(bf), Some(ef)) = (base.folds.first(), cf.fit.folds.first()) else {
+    let Some(h) = a.held_out_trial(ti)? else {
         return Ok(None);
     };
-    let rb = Baseline.residual(sig, 0, &bf.beta, a.latency_s)?;
-    let re = cf
-        .candidate
-        .residual(sig, ef.setting, &ef.beta, a.latency_s)?;
     // The y axis (it carries the reach on the planar rig), or the only axis a rig has.
     let axis = usize::from(sig.present(1));
-    let u = sig.at_rows(&sig.u[axis]);
     let t: Vec<f64> = sig.rows.iter().map(|i| *i as f64 / sig.rate_hz).collect();
-    let line = |pred: Option<&Vec<f64>>| -> Vec<(f64, f64)> {
-        t.iter()
-            .zip(&u)
-            .enumerate()
-            .map(|(k, (t, u))| (*t, u - pred.map_or(0.0, |r| r[k])))
-            .collect()
+    let line = |values: &[f64]| -> Vec<(f64, f64)> {
+        t.iter().zip(values).map(|(t, v)| (*t, *v)).collect()
+    };
+    let model = |name: &str| {
+        h.models
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, p)| &p[axis])
+    };
+    let (Some(rb), Some(re)) = (model("baseline"), model(cf.candidate.name())) else {
+        return Ok(None);
     };
     Ok(Some(Figure {
         title: format!(
@@ -492,19 +490,19 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
         series: vec![
             Series {
                 label: "measured".into(),
-                points: line(None),
+                points: line(&h.command_n[axis]),
                 style: Style::Bold,
                 rgb: (40, 40, 40),
             },
             Series {
                 label: "baseline".into(),
-                points: line(Some(&rb[axis])),
+                points: line(rb),
                 style: Style::Line,
                 rgb: (30, 90, 200),
             },
             Series {
                 label: format!("extended ({})", cf.candidate.name()),
-                points: line(Some(&re[axis])),
+                points: line(re),
                 style: Style::Line,
                 rgb: (210, 50, 40),
             },
