@@ -57,11 +57,11 @@ use crate::effect::EffectKind;
 /// `grams` with faster sums over the same rows). Outside this crate the trait is sealed:
 /// `Designed` cannot be named there.
 pub trait Candidate: Designed + Sync + Send {
-    /// Catalog name (`rail-friction`, ...).
-    fn name(&self) -> &'static str;
-    /// The catalog effect it is (`None` for the baseline and the library's terms).
-    fn kind(&self) -> Option<EffectKind> {
-        None
+    /// The catalog effect it is (`None` for the baseline and the library's terms, which name themselves).
+    fn kind(&self) -> Option<EffectKind>;
+    /// Its name in rankings and errors: the catalog name of its effect.
+    fn name(&self) -> &'static str {
+        self.kind().map_or("(unnamed)", EffectKind::name)
     }
     /// Number of settings of the nonlinear parameter.
     fn settings(&self) -> usize;
@@ -436,6 +436,9 @@ impl Designed for Baseline {
 }
 
 impl Candidate for Baseline {
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     fn name(&self) -> &'static str {
         "baseline"
     }

@@ -73,9 +73,6 @@ impl Designed for ActuationDelay {
 }
 
 impl Candidate for ActuationDelay {
-    fn name(&self) -> &'static str {
-        EffectKind::ActuationDelay.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::ActuationDelay)
     }

@@ -50,9 +50,6 @@ impl Designed for RailFriction {
 }
 
 impl Candidate for RailFriction {
-    fn name(&self) -> &'static str {
-        EffectKind::RailFriction.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::RailFriction)
     }

@@ -240,11 +240,11 @@ pub fn visit_rows(
 
 /// A human-side candidate: a family of linear problems of the hand balance.
 pub trait HandCandidate: Sync + Send {
-    /// Catalog name.
-    fn name(&self) -> &'static str;
-    /// The catalog effect it is (`None` for the baseline and the feedback delay).
-    fn kind(&self) -> Option<EffectKind> {
-        None
+    /// The catalog effect it is (`None` for the baseline and the feedback delay, which name themselves).
+    fn kind(&self) -> Option<EffectKind>;
+    /// Its name in rankings and errors: the catalog name of its effect.
+    fn name(&self) -> &'static str {
+        self.kind().map_or("(unnamed)", EffectKind::name)
     }
     /// Settings of the nonlinear parameter.
     fn settings(&self) -> usize;
@@ -577,6 +577,9 @@ fn lag(r: &HandResponse, s: f64) -> f64 {
 }
 
 impl HandCandidate for HandBaseline {
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     fn name(&self) -> &'static str {
         "hand-baseline"
     }
@@ -609,6 +612,9 @@ impl HandCandidate for HandBaseline {
 pub struct FeedbackDelay;
 
 impl HandCandidate for FeedbackDelay {
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     fn name(&self) -> &'static str {
         "feedback delay"
     }
@@ -642,9 +648,6 @@ impl HandCandidate for FeedbackDelay {
 pub struct HandleMass;
 
 impl HandCandidate for HandleMass {
-    fn name(&self) -> &'static str {
-        EffectKind::HandleMass.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::HandleMass)
     }
@@ -688,9 +691,6 @@ fn reflex_delay_s(s: usize) -> f64 {
 }
 
 impl HandCandidate for StretchReflex {
-    fn name(&self) -> &'static str {
-        EffectKind::StretchReflex.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::StretchReflex)
     }
@@ -741,9 +741,6 @@ fn grip_setting(s: usize) -> (f64, f64) {
 }
 
 impl HandCandidate for GripCompliance {
-    fn name(&self) -> &'static str {
-        EffectKind::GripCompliance.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::GripCompliance)
     }

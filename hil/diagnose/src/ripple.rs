@@ -105,9 +105,6 @@ fn amplitude_phase(beta: &[f64], axis: usize) -> (f64, f64) {
 }
 
 impl Candidate for ForceRipple {
-    fn name(&self) -> &'static str {
-        EffectKind::ForceRipple.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::ForceRipple)
     }

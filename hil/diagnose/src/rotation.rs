@@ -65,9 +65,6 @@ impl Designed for SensorRotation {
 }
 
 impl Candidate for SensorRotation {
-    fn name(&self) -> &'static str {
-        EffectKind::SensorRotation.name()
-    }
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::SensorRotation)
     }

@@ -33,6 +33,7 @@
 use super::candidate::{Candidate, Design, Designed};
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
+use crate::effect::EffectKind;
 
 /// A force law of the library.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -164,6 +165,9 @@ impl Designed for Term {
 }
 
 impl Candidate for Term {
+    fn kind(&self) -> Option<EffectKind> {
+        None
+    }
     fn name(&self) -> &'static str {
         Term::name(*self)
     }
