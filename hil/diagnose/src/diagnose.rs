@@ -1069,9 +1069,9 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// Diagnoses a session: see the module docs.
 ///
 /// The phases: the balance signals of every trial; the cart balance
-/// ([`judge_cart`]: baseline, candidates, forward selection, the library); the hand
-/// balance ([`rank_hand`], on the reading corrected by what the cart balance found about
-/// the sensor); the decision between the two balances ([`decide`]).
+/// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
+/// balance (`rank_hand`, on the reading corrected by what the cart balance found about
+/// the sensor); the decision between the two balances (`decide`).
 ///
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
@@ -1258,19 +1258,27 @@ fn judge_cart(
         .iter()
         .map(|s| s.travel_m(0).max(s.travel_m(1)))
         .fold(0.0, f64::max);
-    let mut candidates: Vec<Arc<dyn Candidate>> = vec![
-        Arc::new(RailFriction),
-        Arc::new(ForceRipple::for_travel(travel)),
-        Arc::new(ActuationDelay::candidate()),
-    ];
-    // A rotated sensor needs a sensor, and both of its axes.
-    if session.manifest.axes == Axes::Both && signals.iter().any(|s| s.sensed) {
-        candidates.push(Arc::new(SensorRotation::default()));
-    } else {
-        not_judged.push(NotJudged {
-            effect: EffectKind::SensorRotation,
-            reason: "needs a handle force sensor on both axes".to_string(),
-        });
+    // Every plant-side effect of the catalog has its candidate here.
+    let mut candidates: Vec<Arc<dyn Candidate>> = Vec::new();
+    for kind in EffectKind::ALL {
+        match kind {
+            EffectKind::RailFriction => candidates.push(Arc::new(RailFriction)),
+            EffectKind::ForceRipple => candidates.push(Arc::new(ForceRipple::for_travel(travel))),
+            EffectKind::ActuationDelay => candidates.push(Arc::new(ActuationDelay::candidate())),
+            // A rotated sensor needs a sensor, and both of its axes.
+            EffectKind::SensorRotation => {
+                if session.manifest.axes == Axes::Both && signals.iter().any(|s| s.sensed) {
+                    candidates.push(Arc::new(SensorRotation::default()));
+                } else {
+                    not_judged.push(NotJudged {
+                        effect: EffectKind::SensorRotation,
+                        reason: "needs a handle force sensor on both axes".to_string(),
+                    });
+                }
+            }
+            // Judged on the hand balance.
+            EffectKind::StretchReflex | EffectKind::GripCompliance | EffectKind::HandleMass => {}
+        }
     }
     let fits: Vec<CandidateFit> = candidates
         .into_par_iter()

@@ -321,4 +321,17 @@ mod tests {
             "handle-mass: no fitted `extra_mass_kg`"
         );
     }
+
+    /// The balances' lists are the catalog split by side, in the catalog's order.
+    #[test]
+    fn the_two_sides_are_the_catalog_split_by_side() {
+        let side = |s: Side| -> Vec<EffectKind> {
+            EffectKind::ALL
+                .into_iter()
+                .filter(|k| k.side() == s)
+                .collect()
+        };
+        assert_eq!(crate::PLANT_SIDE.to_vec(), side(Side::Plant));
+        assert_eq!(crate::HUMAN_SIDE.to_vec(), side(Side::Human));
+    }
 }

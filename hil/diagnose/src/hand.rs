@@ -874,6 +874,20 @@ impl HandJudgement {
     }
 }
 
+/// The hand balance's candidate for a catalog effect (`None` for the cart balance's):
+/// every human-side effect of [`EffectKind`] has one.
+fn hand_candidate(kind: EffectKind) -> Option<Box<dyn HandCandidate>> {
+    match kind {
+        EffectKind::StretchReflex => Some(Box::new(StretchReflex)),
+        EffectKind::GripCompliance => Some(Box::new(GripCompliance)),
+        EffectKind::HandleMass => Some(Box::new(HandleMass)),
+        EffectKind::RailFriction
+        | EffectKind::ForceRipple
+        | EffectKind::ActuationDelay
+        | EffectKind::SensorRotation => None,
+    }
+}
+
 /// The hand balance of a session: `Ok(Err(reason))` when the session cannot carry it.
 ///
 /// # Errors
@@ -945,11 +959,10 @@ pub fn judge_hand(
         });
     let grams = |c: &dyn HandCandidate, fb: f64| grams_of(&responses, c, fb, &whitening);
     let baseline = cross_validate(&grams(&HandBaseline, fb_delay_s), &folds, "hand baseline")?;
-    let candidates: Vec<Box<dyn HandCandidate>> = vec![
-        Box::new(StretchReflex),
-        Box::new(GripCompliance),
-        Box::new(HandleMass),
-    ];
+    let candidates: Vec<Box<dyn HandCandidate>> = EffectKind::ALL
+        .into_iter()
+        .filter_map(hand_candidate)
+        .collect();
     let fits = candidates
         .into_par_iter()
         .map(|c| {
