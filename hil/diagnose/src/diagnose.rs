@@ -1175,15 +1175,23 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         );
     }
     d.not_judged = not_judged;
+    // The cart balance's fits move into the analysis (nothing of it is cloned).
+    let (latency_s, baseline, folds, fits) = match cart {
+        Some(c) => (
+            c.latency_s,
+            Some(c.baseline),
+            Some(c.folds),
+            c.ranked.into_iter().map(|(_, f)| f).collect(),
+        ),
+        None => (0.0, None, None, Vec::new()),
+    };
     Ok(Analysis {
         diagnosis: d,
         signals,
-        latency_s: cart.as_ref().map_or(0.0, |c| c.latency_s),
-        baseline: cart.as_ref().map(|c| c.baseline.clone()),
-        folds: cart.as_ref().map(|c| c.folds.clone()),
-        fits: cart
-            .map(|c| c.ranked.into_iter().map(|(_, f)| f).collect())
-            .unwrap_or_default(),
+        latency_s,
+        baseline,
+        folds,
+        fits,
         hand: hand.judgement,
     })
 }
