@@ -80,6 +80,29 @@ impl EffectKind {
         }
     }
 
+    /// The parameters a diagnosis reports for it (`Cause::parameters`' keys, units in
+    /// the names); a sweep compares one of them with the size it hid.
+    #[must_use]
+    pub const fn parameter_names(self) -> &'static [&'static str] {
+        match self {
+            EffectKind::RailFriction => {
+                &["coulomb_n", "viscous_n_s_per_m", "smooth_velocity_m_per_s"]
+            }
+            EffectKind::ForceRipple => &[
+                "amplitude_x_n",
+                "amplitude_y_n",
+                "pitch_m",
+                "phase_x_rad",
+                "phase_y_rad",
+            ],
+            EffectKind::ActuationDelay => &["delay_ms"],
+            EffectKind::SensorRotation => &["angle_deg"],
+            EffectKind::StretchReflex => &["delay_ms", "gain"],
+            EffectKind::GripCompliance => &["stiffness_n_per_m", "damping_n_s_per_m"],
+            EffectKind::HandleMass => &["extra_mass_kg"],
+        }
+    }
+
     /// The balance that judges it.
     #[must_use]
     pub const fn side(self) -> Side {
@@ -259,6 +282,38 @@ impl Effect {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every effect is built from exactly the parameters `parameter_names` lists (a sweep
+    /// checks its `parameter` against them), and each one it needs is among them.
+    #[test]
+    fn parameter_names_build_every_effect() {
+        for kind in EffectKind::ALL {
+            let p: BTreeMap<String, f64> = kind
+                .parameter_names()
+                .iter()
+                .map(|n| ((*n).to_owned(), 0.01))
+                .collect();
+            assert!(Effect::from_parameters(kind, &p).is_ok(), "{}", kind.name());
+            for n in kind.parameter_names() {
+                let mut less = p.clone();
+                less.remove(*n);
+                let optional = matches!(
+                    *n,
+                    "phase_x_rad"
+                        | "phase_y_rad"
+                        | "damping_n_s_per_m"
+                        | "amplitude_x_n"
+                        | "amplitude_y_n"
+                );
+                assert_eq!(
+                    Effect::from_parameters(kind, &less).is_ok(),
+                    optional,
+                    "{} without {n}",
+                    kind.name()
+                );
+            }
+        }
+    }
 
     #[test]
     fn every_name_reads_back_as_its_effect_and_a_wrong_one_lists_the_catalog() {

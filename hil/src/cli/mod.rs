@@ -17,6 +17,7 @@ pub mod inspect;
 pub mod link;
 pub mod plant;
 pub mod rehearse;
+pub mod sweep;
 #[cfg(feature = "rerun")]
 pub mod view;
 
@@ -31,6 +32,7 @@ Examples:
   rigtwin import log.mat --map map.toml --out session/
   rigtwin rehearse hil/protocols/reach-perturb.toml
   rigtwin estimate ../shared/recordings/example-none
+  rigtwin sweep hil/sweeps/pulses.toml
   rigtwin plant serve reach-perturb --listen 127.0.0.1:47000
   rigtwin controller reach-perturb --rig udp://127.0.0.1:47000 --max-trials 4
   rigtwin help inspect")]
@@ -73,6 +75,9 @@ pub enum Command {
     /// the model's plant and human-side effects are added, so the two runs differ by the
     /// model alone.
     Compare(compare::Args),
+    /// Sweep a protocol's choices over a population of simulated subjects, locally, as a
+    /// shard of a job array, or as a Slurm job array (`--emit slurm`); `sweep merge`.
+    Sweep(sweep::Args),
     /// Run the rig's controller in real time against a plant across the wire (UDP).
     Controller(controller::Args),
     /// The simulated rig and subject as a plant across the wire: `plant serve`.
@@ -111,6 +116,7 @@ pub fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Estimate(args) => estimate::run(args),
         Command::Diagnose(args) => diagnose::run(args),
         Command::Compare(args) => compare::run(args),
+        Command::Sweep(args) => sweep::run(args),
         Command::Controller(args) => controller::run(args),
         Command::Plant(args) => plant::run(args),
         #[cfg(feature = "rerun")]

@@ -108,7 +108,7 @@ pub struct Args {
     pub live_rate_hz: f64,
 }
 
-fn default_jobs() -> usize {
+pub(crate) fn default_jobs() -> usize {
     std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
 }
 

@@ -15,7 +15,7 @@
 //! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
 
 mod error;
-mod locate;
+pub(crate) mod locate;
 pub mod nuisance;
 pub mod seed;
 pub mod subjects;
@@ -487,7 +487,7 @@ impl Protocol {
         Protocol::from_toml(&text, path)
     }
 
-    fn builtin_text(name: &str) -> Option<&'static str> {
+    pub(crate) fn builtin_text(name: &str) -> Option<&'static str> {
         BUILTIN.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
     }
 
@@ -848,7 +848,7 @@ fn sum_and_largest(parts: &[(f64, &'static str)]) -> (f64, &'static str) {
 /// A TOML error as one line: `line L, column C: message`, the message cut to
 /// [`rigtwin_device::check::MAX_QUOTE_CHARS`] (toml's own text quotes the whole line, and
 /// serde quotes a bad string whole).
-fn parse_message(text: &str, e: &toml::de::Error) -> String {
+pub(crate) fn parse_message(text: &str, e: &toml::de::Error) -> String {
     let message = rigtwin_device::check::excerpt(e.message().trim_end(), MAX_QUOTE);
     match e.span() {
         Some(span) => {

@@ -11,6 +11,12 @@
 //! | `co_contraction` | both co-contraction torques | 0.25 | as above |
 //! | `segment_length` | upper arm and forearm lengths (independent) | 0.05 | adult male anthropometry, CV ≈ 5 % |
 //! | `feedback_gain` | position and velocity gains of the delayed feedback | 0.20 | unverified; a stated guess |
+//! | `reflex_gain` | the stretch reflex's gain, when the arm has a reflex | 0 | a population of one reflex gain unless a sweep says otherwise |
+//!
+//! The reflex factor is drawn after the other five, so a spread of it never changes
+//! them; it is not one of [`VirtualSubject::factors`] (which `compare`'s subject fit
+//! varies), so a subject fit of a session with a reflex spread starts from the nominal
+//! reflex.
 //!
 //! With `first_is_nominal` (default), subject 1 is the nominal arm itself: the one the
 //! seed-reproduction tests calibrate against Table 1.
@@ -34,6 +40,8 @@ pub struct SubjectSpread {
     pub segment_length: f64,
     /// σ of the feedback gain factor.
     pub feedback_gain: f64,
+    /// σ of the stretch reflex's gain factor (when the arm has a reflex).
+    pub reflex_gain: f64,
 }
 
 impl Default for SubjectSpread {
@@ -43,6 +51,7 @@ impl Default for SubjectSpread {
             co_contraction: 0.25,
             segment_length: 0.05,
             feedback_gain: 0.20,
+            reflex_gain: 0.0,
         }
     }
 }
@@ -111,6 +120,7 @@ impl SubjectsConfig {
             ("subjects.spread.co_contraction", s.co_contraction),
             ("subjects.spread.segment_length", s.segment_length),
             ("subjects.spread.feedback_gain", s.feedback_gain),
+            ("subjects.spread.reflex_gain", s.reflex_gain),
         ] {
             c.non_negative(key, v);
             if v.is_finite() && v > 1.0 {
@@ -161,7 +171,12 @@ impl SubjectsConfig {
             factor(s.segment_length),
             factor(s.feedback_gain),
         ];
-        self.with_factors(index, f)
+        let reflex = factor(s.reflex_gain);
+        let mut subject = self.with_factors(index, f);
+        if let Some(r) = &mut subject.arm.stretch_reflex {
+            r.gain_n_s_per_m *= reflex;
+        }
+        subject
     }
 
     /// Subject `index` (1-based) made from the nominal arm with the given factors
