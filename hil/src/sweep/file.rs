@@ -7,6 +7,12 @@
 //! seed = 1                     # draws the population and every session's noise
 //! replicates = 1               # sessions per subject and grid point
 //! max_trials = 40              # optional: the first 40 trials of each session
+//! realistic = true             # a lab's rig and subject: the protocol's [nuisance], or
+//!                              # its realistic defaults (sensor offset and drift, motor
+//!                              # gain and noise, reaches varying); default false
+//!
+//! [set]                        # protocol keys held at these values in every run
+//! "recording.truth_columns" = false
 //!
 //! [grid]                       # any protocol key, dotted; the runs are its product
 //! "reach.repetitions" = [1, 2, 3]
@@ -212,6 +218,10 @@ struct Raw {
     replicates: u32,
     max_trials: Option<usize>,
     #[serde(default)]
+    realistic: bool,
+    #[serde(default)]
+    set: BTreeMap<String, toml::Value>,
+    #[serde(default)]
     grid: BTreeMap<String, Vec<toml::Value>>,
     #[serde(default)]
     population: Population,
@@ -247,6 +257,8 @@ pub struct SweepFile {
     pub replicates: u32,
     /// The first trials of each session only.
     pub max_trials: Option<usize>,
+    /// A lab's rig and subject (the nuisances).
+    pub realistic: bool,
     /// The grid: keys in file order of their names (sorted), each with its values.
     pub grid: Vec<(String, Vec<toml::Value>)>,
     /// The population.
@@ -319,7 +331,7 @@ impl SweepFile {
             let mut lines = crate::protocol::locate::lines_of(text, root.as_ref(), &errors);
             // A grid key is one quoted name with dots in it: find its own line.
             for (e, line) in errors.iter().zip(&mut lines) {
-                let quoted = ["grid.", "effect.fixed."]
+                let quoted = ["grid.", "effect.fixed.", "set."]
                     .iter()
                     .find_map(|p| e.key.strip_prefix(p))
                     .map(|k| format!("\"{k}\""));
@@ -344,7 +356,7 @@ impl SweepFile {
             Some(t) => t.to_owned(),
             None => protocol_source(&raw.protocol, path)?,
         };
-        let base: toml::Table =
+        let mut base: toml::Table =
             toml::from_str(&protocol_text).map_err(|e| SweepFileError::Protocol {
                 path: path.to_path_buf(),
                 source: ProtocolError::Parse {
@@ -352,6 +364,13 @@ impl SweepFile {
                     message: e.to_string(),
                 },
             })?;
+        if raw.realistic && !base.contains_key("nuisance") {
+            // An empty table takes the realistic ranges (`NuisanceConfig::default`).
+            base.insert(
+                "nuisance".to_owned(),
+                toml::Value::Table(toml::Table::new()),
+            );
+        }
         let grid: Vec<(String, Vec<toml::Value>)> = raw.grid.into_iter().collect();
         let sizes: Vec<Option<f64>> = match &raw.effect {
             Some(e) => e.sizes.iter().copied().map(Some).collect(),
@@ -376,7 +395,14 @@ impl SweepFile {
         for point in 0..points {
             let values = point_values(&grid, point);
             for size in &sizes {
-                match build_protocol(&base, &values, raw.effect.as_ref(), *size, &raw.population) {
+                match build_protocol(
+                    &base,
+                    &raw.set,
+                    &values,
+                    raw.effect.as_ref(),
+                    *size,
+                    &raw.population,
+                ) {
                     Ok(p) => protocols.push(p),
                     Err((key, problem)) => {
                         if !errors.iter().any(|e: &InvalidKey| e.key == key) {
@@ -400,6 +426,7 @@ impl SweepFile {
             seed: raw.seed,
             replicates: raw.replicates,
             max_trials: raw.max_trials,
+            realistic: raw.realistic || protocols.first().is_some_and(|p| p.nuisance.is_some()),
             grid,
             population: raw.population,
             estimate: raw.measure.estimate.unwrap_or(reach),
@@ -510,6 +537,20 @@ fn check_raw(raw: &Raw, c: &mut crate::protocol::Checker) {
             "measure.folds",
             format!("must be >= 2, got {}", raw.measure.folds),
         );
+    }
+    for key in raw.set.keys() {
+        if !is_dotted_key(key) {
+            c.fail(
+                format!("set.{key}"),
+                "is not a dotted protocol key of names",
+            );
+        }
+        if raw.grid.contains_key(key) {
+            c.fail(
+                format!("set.{key}"),
+                "is also in [grid]; sweep it or set it, not both",
+            );
+        }
     }
     for (key, values) in &raw.grid {
         let k = format!("grid.{key}");
@@ -631,6 +672,7 @@ fn set_key(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(),
 /// `key` being the sweep file's key that caused it.
 fn build_protocol(
     base: &toml::Table,
+    set: &BTreeMap<String, toml::Value>,
     values: &[(String, toml::Value)],
     effect: Option<&EffectSweep>,
     size: Option<f64>,
@@ -638,6 +680,10 @@ fn build_protocol(
 ) -> Result<Protocol, (String, String)> {
     let mut t = base.clone();
     let mut sources: Vec<(String, String)> = Vec::new();
+    for (key, value) in set {
+        set_key(&mut t, key, value.clone()).map_err(|e| (format!("set.{key}"), e))?;
+        sources.push((key.clone(), format!("set.{key}")));
+    }
     for (key, value) in values {
         set_key(&mut t, key, value.clone()).map_err(|e| (format!("grid.{key}"), e))?;
         sources.push((key.clone(), format!("grid.{key}")));
@@ -762,6 +808,27 @@ subjects = 2
         assert_eq!(s.protocols[4].controller.force_pulse.amplitude_n, 20.0);
         assert_eq!(s.protocols[4].reach().repetitions, 1);
         assert!(s.estimate && !s.diagnose);
+    }
+
+    /// `realistic` gives every point the protocol's realistic nuisances; `[set]` holds a
+    /// key in every run; a key both set and swept is refused.
+    #[test]
+    fn realistic_and_set_reach_every_point() {
+        let text = GOOD.replace(
+            "replicates = 2",
+            "replicates = 2\nrealistic = true\n\n[set]\n\"recording.rate_hz\" = 500",
+        );
+        let s = SweepFile::from_toml(&text, Path::new("s.toml")).unwrap();
+        assert!(s.realistic);
+        for p in &s.protocols {
+            assert_eq!(
+                p.nuisance,
+                Some(crate::protocol::nuisance::NuisanceConfig::REALISTIC)
+            );
+            assert_eq!(p.recording.rate_hz, 500);
+        }
+        let both = text.replace("\"recording.rate_hz\" = 500", "\"reach.repetitions\" = 2");
+        assert!(err(&both).names("set.reach.repetitions"));
     }
 
     /// Each bad file is refused naming its key (and, where the file has it, the line).

@@ -318,7 +318,7 @@ pub fn write(
     let _ = writeln!(
         md,
         "{runs} runs: {} grid point(s) × {} effect size(s) × {} subjects × {} replicate(s); \
-         seed {}; {}. The table is `sweep.csv` (one row per run; units in the column names).\n",
+         seed {}; {}; {}. The table is `sweep.csv` (one row per run; units in the column names).\n",
         sweep.points(),
         sweep.sizes(),
         sweep.population.subjects,
@@ -328,7 +328,12 @@ pub fn write(
             .max_trials
             .map_or("whole sessions".to_owned(), |m| format!(
                 "the first {m} trials of each session"
-            ))
+            )),
+        if sweep.realistic {
+            "a lab's rig and subject (sensor offset and drift, motor gain and noise, reaches varying)"
+        } else {
+            "an ideal rig"
+        }
     );
     if !sweep.grid.is_empty() {
         let _ = writeln!(md, "| grid key | values |\n|---|---|");
