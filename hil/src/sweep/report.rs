@@ -758,14 +758,14 @@ fn draw_detection(rows: &[DetectionRow], key: &str, path: &Path) -> Result<(), S
                     c.stroke_width(2),
                 ))
                 .map_err(|e| e.to_string())?;
-            if text {
+            if text && names.len() > 1 {
                 let label = (*name).to_owned();
                 anno.label(label).legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(3))
                 });
             }
         }
-        if text {
+        if text && names.len() > 1 {
             chart
                 .configure_series_labels()
                 .position(SeriesLabelPosition::LowerRight)
