@@ -28,7 +28,7 @@ pub enum ProtocolError {
         message: String,
     },
     /// The file parsed, but some values are out of range.
-    #[error("{path}: invalid protocol: {}", located(.errors, .lines))]
+    #[error("{path}: invalid protocol: {}", located(.errors, .lines, "not in the file (its default): "))]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -53,14 +53,15 @@ impl ProtocolError {
     }
 }
 
-/// ``line 17: `reach.trials` must be > 0, got 0; line 40: ...``.
-fn located(errors: &[InvalidKey], lines: &[Option<usize>]) -> String {
+/// ``line 17: `reach.trials` must be > 0, got 0; line 40: ...``; a key without a line
+/// is said after `no_line`.
+pub(crate) fn located(errors: &[InvalidKey], lines: &[Option<usize>], no_line: &str) -> String {
     errors
         .iter()
         .zip(lines.iter().chain(std::iter::repeat(&None)))
         .map(|(e, l)| match l {
             Some(l) => format!("line {l}: `{}` {}", e.key, e.problem),
-            None => format!("not in the file (its default): `{}` {}", e.key, e.problem),
+            None => format!("{no_line}`{}` {}", e.key, e.problem),
         })
         .collect::<Vec<_>>()
         .join("; ")

@@ -14,7 +14,7 @@
 //! (`reach.trials`, `controller.admittance.mass_kg[0]`, `subjects.arm.upper`).
 //! The shipped files are in `hil/protocols/` and built in ([`Protocol::builtin`]).
 
-mod error;
+pub(crate) mod error;
 pub(crate) mod locate;
 pub mod nuisance;
 pub mod seed;

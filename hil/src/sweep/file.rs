@@ -87,7 +87,7 @@ pub enum SweepFileError {
         message: String,
     },
     /// A value out of range, or a grid point the protocol refuses.
-    #[error("{path}: {}", located(.errors, .lines))]
+    #[error("{path}: {}", crate::protocol::error::located(.errors, .lines, ""))]
     Invalid {
         /// The file.
         path: PathBuf,
@@ -117,18 +117,6 @@ impl SweepFileError {
             SweepFileError::Read { .. } => false,
         }
     }
-}
-
-fn located(errors: &[InvalidKey], lines: &[Option<usize>]) -> String {
-    errors
-        .iter()
-        .zip(lines.iter().chain(std::iter::repeat(&None)))
-        .map(|(e, l)| match l {
-            Some(l) => format!("line {l}: `{}` {}", e.key, e.problem),
-            None => format!("`{}` {}", e.key, e.problem),
-        })
-        .collect::<Vec<_>>()
-        .join("; ")
 }
 
 /// The population of virtual subjects a sweep draws (the base protocol's `[subjects]`
