@@ -7,7 +7,6 @@ pub mod protocol;
 pub mod rehearse;
 pub mod remote;
 pub mod report;
-/// Protocol design sweeps over simulated populations, local or as job-array shards.
 pub mod sweep;
 
 /// The diagnosis of a measured session (its own crate, `rigtwin-diagnose`).

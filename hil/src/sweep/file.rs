@@ -798,6 +798,22 @@ subjects = 2
         assert!(s.estimate && !s.diagnose);
     }
 
+    /// Every shipped sweep file (`hil/sweeps/*.toml`) reads and builds all its points.
+    #[test]
+    fn the_shipped_sweeps_load() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("sweeps");
+        let mut n = 0;
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.extension().is_some_and(|e| e == "toml") {
+                let s = SweepFile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                assert!(s.runs() > 0 && s.protocols.len() == s.points() * s.sizes());
+                n += 1;
+            }
+        }
+        assert!(n >= 2, "{n} sweep files in {}", dir.display());
+    }
+
     /// `realistic` gives every point the protocol's realistic nuisances; `[set]` holds a
     /// key in every run; a key both set and swept is refused.
     #[test]

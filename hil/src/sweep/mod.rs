@@ -3,7 +3,7 @@
 //! measured against its simulated truth, run locally on all cores or as shards of a
 //! cluster's job array, merged into one table and a report.
 //!
-//! - [`file`]: the sweep file and its checks (every grid point's protocol is built
+//! - [`file`](mod@file): the sweep file and its checks (every grid point's protocol is built
 //!   before a run starts).
 //! - [`run`]: one run: the subject drawn, the session rehearsed, D and K estimated
 //!   against the arm's intrinsic values, the diagnosis asked for the hidden effect.
