@@ -13,24 +13,22 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use rigtwin::rehearse::{self, Options};
 use rigtwin::sweep::{self, Run, SweepFile};
 
-const SWEEP: &str = r#"
-name = "bench"
-protocol = "reach-perturb"
-seed = 1
-max_trials = 10
-
-[grid]
-"reach.trials" = [10]
-"reach.repetitions" = [1]
-
-[population]
-subjects = 4
-"#;
+/// The sweep tests' small sweep (`tests/slurm/small-sweep.toml`) with one amplitude and
+/// four subjects, seed 1.
+fn sweep_text() -> String {
+    include_str!("../tests/slurm/small-sweep.toml")
+        .replace(
+            "\"controller.force_pulse.amplitude_n\" = [10.0, 15.0]",
+            "\"controller.force_pulse.amplitude_n\" = [15.0]",
+        )
+        .replace("subjects = 2", "subjects = 4")
+        .replace("seed = 5", "seed = 1")
+}
 
 fn bench(c: &mut Criterion) {
     let tmp = tempfile::tempdir().unwrap();
     let path = tmp.path().join("bench.toml");
-    std::fs::write(&path, SWEEP).unwrap();
+    std::fs::write(&path, sweep_text()).unwrap();
     let s = SweepFile::load(&path).unwrap();
     let run = Run::at(&s, 0);
     let protocol = sweep::run::protocol_of(&s, &run);

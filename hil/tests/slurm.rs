@@ -15,20 +15,13 @@ use std::time::{Duration, Instant};
 
 use rigtwin::sweep::{self, SweepFile};
 
-const SWEEP: &str = r#"
-name = "slurm-test"
-protocol = "reach-perturb"
-seed = 9
-max_trials = 10
-
-[grid]
-"reach.trials" = [10]
-"reach.repetitions" = [1]
-"controller.force_pulse.amplitude_n" = [10.0, 15.0]
-
-[population]
-subjects = 3
-"#;
+/// The sweep tests' small sweep with three subjects and its own seed: 6 runs.
+fn sweep_text() -> String {
+    include_str!("slurm/small-sweep.toml")
+        .replace("name = \"small\"", "name = \"slurm-test\"")
+        .replace("seed = 5", "seed = 9")
+        .replace("subjects = 2", "subjects = 3")
+}
 
 fn script() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/slurm/cluster.sh")
@@ -56,7 +49,7 @@ fn slurm_conf(dir: &Path) -> PathBuf {
 fn a_slurm_job_array_and_its_dependent_merge_give_the_local_table() {
     let tmp = tempfile::tempdir().unwrap();
     let sweep_file = tmp.path().join("sweep.toml");
-    std::fs::write(&sweep_file, SWEEP).unwrap();
+    std::fs::write(&sweep_file, sweep_text()).unwrap();
     let s = SweepFile::load(&sweep_file).unwrap();
     assert_eq!(s.runs(), 6);
     let local = sweep::run_local(&s, &tmp.path().join("local"), 2, &|_, _| {}).unwrap();

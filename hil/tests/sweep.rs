@@ -9,22 +9,8 @@ use std::path::{Path, PathBuf};
 
 use rigtwin::sweep::{self, ShardDone, ShardError, SweepError, SweepFile, table};
 
-/// Four short runs: two pulse amplitudes × two subjects, sessions of ten reaches with
-/// eight pulses (what the estimator and the hand balance need at the least).
-const SMALL: &str = r#"
-name = "small"
-protocol = "reach-perturb"
-seed = 5
-max_trials = 10
-
-[grid]
-"reach.trials" = [10]
-"reach.repetitions" = [1]
-"controller.force_pulse.amplitude_n" = [10.0, 15.0]
-
-[population]
-subjects = 2
-"#;
+/// Four short runs: two pulse amplitudes × two subjects (`tests/slurm/small-sweep.toml`).
+const SMALL: &str = include_str!("slurm/small-sweep.toml");
 
 fn load(text: &str, dir: &Path) -> SweepFile {
     std::fs::create_dir_all(dir).unwrap();

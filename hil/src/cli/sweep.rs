@@ -3,6 +3,7 @@
 //! Slurm job array; `rigtwin sweep merge` combines the shards.
 
 use clap::builder::TypedValueParser as _;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -78,11 +79,11 @@ pub struct Args {
     pub cpus_per_task: usize,
 
     /// --emit slurm: the partition to submit to.
-    #[arg(long)]
+    #[arg(long, value_parser = slurm_name)]
     pub partition: Option<String>,
 
     /// --emit slurm: the account to charge.
-    #[arg(long)]
+    #[arg(long, value_parser = slurm_name)]
     pub account: Option<String>,
 
     /// --emit slurm: take this wall time per simulated second of a run instead of
@@ -115,6 +116,22 @@ pub enum Command {
         /// The sweep's folder (with sweep.toml and shards/).
         dir: PathBuf,
     },
+}
+
+/// A partition or account name as it goes into an `#SBATCH` line: letters, digits and
+/// `_ - . ,` only, so nothing else can be written into the script.
+fn slurm_name(v: &str) -> Result<String, String> {
+    if !v.is_empty()
+        && v.len() <= 128
+        && v.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | ','))
+    {
+        Ok(v.to_owned())
+    } else {
+        Err(format!(
+            "{v:?}: want a Slurm name of letters, digits, _ - . and , (at most 128)"
+        ))
+    }
 }
 
 fn parse_shard(v: &str) -> Result<(usize, usize), String> {
@@ -197,16 +214,22 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
             mine as u64,
             "{elapsed_precise} [{bar:40}] {pos}/{len} runs, {eta} left",
         );
-        let done = sweep::run_shard(&s, &out, k, n, args.jobs, &|d, _| {
-            bar.set_position(d as u64)
+        // A task's log (no terminal) gets a line per run instead of the bar.
+        let log = !std::io::IsTerminal::is_terminal(&std::io::stderr());
+        let done = sweep::run_shard(&s, &out, k, n, args.jobs, &|d, total| {
+            bar.set_position(d as u64);
+            if log {
+                let _ = writeln!(
+                    std::io::stderr().lock(),
+                    "shard {k}/{n}: {d}/{total} runs done"
+                );
+            }
         })?;
         bar.finish_and_clear();
         match done {
-            ShardDone::Written(p, n) => outln!(
-                "shard {k}/{}: {n} runs written to {}",
-                args.shard.map_or(0, |s| s.1),
-                p.display()
-            ),
+            ShardDone::Written(p, runs) => {
+                outln!("shard {k}/{n}: {runs} runs written to {}", p.display());
+            }
             ShardDone::AlreadyThere(p) => outln!(
                 "shard {k}/{n} is already complete in {}; nothing to do",
                 p.display()
