@@ -283,9 +283,7 @@ impl SweepFile {
     }
 
     /// Parses and checks a sweep from its text; `path` names it in errors and anchors a
-    /// relative `protocol` path. With `protocol_text`, that text is the base protocol
-    /// (a merge reads the copy kept next to the results) instead of the one `protocol`
-    /// names.
+    /// relative `protocol` path.
     ///
     /// # Errors
     /// [`SweepFileError`], naming the file, the line and the key.
@@ -293,7 +291,8 @@ impl SweepFile {
         SweepFile::parse(text, path, None)
     }
 
-    /// [`SweepFile::from_toml`] with the base protocol's text given.
+    /// [`SweepFile::from_toml`] with the base protocol's text given instead of the one
+    /// `protocol` names (a merge reads the copy kept next to the results).
     ///
     /// # Errors
     /// As [`SweepFile::from_toml`].
@@ -442,6 +441,13 @@ impl SweepFile {
     #[must_use]
     pub fn runs(&self) -> usize {
         self.points() * self.sizes() * self.population.subjects as usize * self.replicates as usize
+    }
+
+    /// The protocol of grid point `point` at effect size `size` (0 without an effect),
+    /// before a subject is drawn into it.
+    #[must_use]
+    pub fn protocol_at(&self, point: usize, size: usize) -> &Protocol {
+        &self.protocols[point * self.sizes() + size]
     }
 
     /// The grid values of point `point`.

@@ -156,7 +156,7 @@ pub enum RunError {
 /// subject of the session.
 #[must_use]
 pub fn protocol_of(sweep: &SweepFile, run: &Run) -> crate::protocol::Protocol {
-    let mut p = sweep.protocols[run.point * sweep.sizes() + run.size].clone();
+    let mut p = sweep.protocol_at(run.point, run.size).clone();
     let subject = p
         .subjects
         .draw(mix(&[sweep.seed, POPULATION_TAG]), run.subject);

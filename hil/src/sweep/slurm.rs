@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::SweepFile;
-use super::run::{Run, protocol_of};
+use super::run::Run;
 use crate::rehearse::cost::Cost;
 
 /// What the scripts ask of the cluster.
@@ -40,11 +40,12 @@ pub struct SlurmPlan {
     pub peak_bytes: f64,
 }
 
-/// A run's expected simulated time, s (trials and the unperturbed twins of its pulses).
+/// A run's expected simulated time, s (trials and the unperturbed twins of its pulses):
+/// its grid point's protocol decides it, whichever subject is drawn into it.
 #[must_use]
 pub fn simulated_s(sweep: &SweepFile, run: &Run) -> f64 {
-    let p = protocol_of(sweep, run);
-    let cost = Cost::of(&p, 1, sweep.max_trials, 1, false);
+    let p = sweep.protocol_at(run.point, run.size);
+    let cost = Cost::of(p, 1, sweep.max_trials, 1, false);
     let twins = if p.kind == crate::protocol::ProtocolKind::ReachPerturb {
         let trials = cost.trials as f64;
         let perturbed = p.reach().perturbed() as f64;
