@@ -25,11 +25,11 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-nuisance",
-        "01e41de0e7fd7c3c5131db9b9c3db373ade7b2e0517abc4bb1268a20c5d4b75d",
+        "5e87f52cea10f26267c7d1357c08db148c9698fd07311f1ace70c59b6119bd32",
     ),
     (
         "example-rotation-mass",
-        "47a975c3fddf8f394920f7ad8b676374be4b5627cbf18d9a7be2d35589a5f339",
+        "9bb08db6da63b0bae520d88dac252c80414fce8cb738774287b81e48ef011b93",
     ),
 ];
 

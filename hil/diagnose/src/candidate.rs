@@ -67,6 +67,12 @@ pub trait Candidate: Designed + Sync + Send {
     fn settings(&self) -> usize;
     /// The nonlinear parameter's name (with unit) and its value at setting `s`.
     fn setting(&self, s: usize) -> (&'static str, f64);
+    /// Where setting `s` lies on the search's range of its parameter, and how many
+    /// values that range has (for the edge rule, `decide::at_edge`): the setting itself
+    /// unless the search crosses its parameter with another choice.
+    fn search_position(&self, s: usize) -> (usize, usize) {
+        (s, self.settings())
+    }
     /// Regressors: the two masses first, then the candidate's own (the nominal
     /// balance's [`NUISANCE_COLUMNS`] follow them in every fit).
     fn columns(&self) -> usize;

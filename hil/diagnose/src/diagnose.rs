@@ -476,7 +476,8 @@ impl Judge<'_> {
             params_with_se(c.parameters(fit.setting, &fit.beta, lat), &fold_params);
         let s = fit.setting;
         let mut rejected = immaterial(c.kind(), &parameters, self.scale, lat * 1e3);
-        rejected.extend(at_edge(c.kind(), c.setting(s), s, c.settings()));
+        let (at, of) = c.search_position(s);
+        rejected.extend(at_edge(c.kind(), c.setting(s), at, of));
         let mut significant = t > self.t_critical && gain >= self.min_gain;
         let mut r2 = None;
         if significant {
@@ -1095,6 +1096,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     } else {
         signals
     };
+    let signals = with_fast_velocities(signals)?;
     let hand = judge_hand(session, opts.folds)?;
     let mut not_judged: Vec<NotJudged> = Vec::new();
     let mut d = Diagnosis {
@@ -1195,6 +1197,71 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand: hand.judgement,
     })
 }
+
+/// The signals with their fast velocities ([`BalanceSignals::with_fast_velocity`]),
+/// from the nominal balance's masses and force gains fitted on all trials at zero
+/// latency (a scale for the fast part only: a mass 10 % off makes its velocity 10 %
+/// off). Fewer than [`MIN_TRIALS`] trials are returned as they are.
+pub(crate) fn with_fast_velocities(
+    signals: Vec<BalanceSignals>,
+) -> Result<Vec<BalanceSignals>, DiscrepancyError> {
+    if signals.len() < MIN_TRIALS {
+        return Ok(signals);
+    }
+    let grams = grams_of(&Baseline, &signals, 0.0)?;
+    let Some(p) = grams.first().and_then(|g| g.first()).map(|g| g.p) else {
+        return Ok(signals);
+    };
+    let Some(beta) = Gram::sum(p, grams.iter().filter_map(|g| g.first())).solve() else {
+        return Ok(signals);
+    };
+    let nominal = nominal_parameters(&beta, &signals);
+    let value = |key: String, default: f64| nominal.get(&key).copied().unwrap_or(default);
+    let mass = ["x", "y"].map(|a| value(format!("moving_mass_{a}_kg"), f64::NAN));
+    let gain = ["x", "y"].map(|a| value(format!("motor_force_gain_{a}"), 1.0));
+    let mut signals: Vec<BalanceSignals> = signals
+        .into_par_iter()
+        .map(|s| s.with_fast_velocity(mass, gain))
+        .collect::<Result<_, _>>()?;
+    // The factor and lag that match the encoder, summed over the session.
+    let max_lag = (FAST_MATCH_LAG_S * signals[0].rate_hz).ceil() as usize;
+    let sums = signals
+        .par_iter()
+        .map(|s| s.fast_match(max_lag))
+        .collect::<Result<Vec<_>, _>>()?;
+    for axis in 0..2 {
+        let mut total = vec![(0.0, 0.0); 2 * max_lag + 1];
+        for s in &sums {
+            for (t, (num, den)) in total.iter_mut().zip(&s[axis]) {
+                t.0 += num;
+                t.1 += den;
+            }
+        }
+        let best = total
+            .iter()
+            .enumerate()
+            .filter(|(_, (_, den))| *den > 0.0)
+            .max_by(|a, b| (a.1.0 * a.1.0 / a.1.1).total_cmp(&(b.1.0 * b.1.0 / b.1.1)));
+        let (factor, lag) = best.map_or((0.0, 0), |(l, (num, den))| {
+            (
+                (num / den).clamp(0.0, FAST_MATCH_MAX),
+                l as isize - max_lag as isize,
+            )
+        });
+        for s in &mut signals {
+            s.match_fast(axis, factor, lag);
+        }
+    }
+    Ok(signals)
+}
+
+/// Largest lag searched between the forces' fast velocity and the encoder's, s: a
+/// delay of up to [`crate::signals::MAX_DELAY_S`] moves the command's fast part, but
+/// at a limit cycle of ~200 Hz half a period (2.5 ms) holds every phase.
+const FAST_MATCH_LAG_S: f64 = 2.5e-3;
+/// Largest factor between the encoder's fast motion and the forces' (a fast velocity
+/// the encoder sees more of than the forces give is not one the forces made).
+const FAST_MATCH_MAX: f64 = 1.5;
 
 /// Fewest trials (or blocks) the cart balance cross-validates.
 const MIN_TRIALS: usize = 4;

@@ -200,6 +200,9 @@ impl Candidate for Joint {
     fn setting(&self, s: usize) -> (&'static str, f64) {
         self.next.setting(s)
     }
+    fn search_position(&self, s: usize) -> (usize, usize) {
+        self.next.search_position(s)
+    }
     fn columns(&self) -> usize {
         2 + self
             .fixed

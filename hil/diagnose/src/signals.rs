@@ -26,7 +26,9 @@
 //! window: the filtered signals hold little above ~30 Hz, so samples closer than
 //! ~2 ms carry almost no new information and only cost time.
 
-use rigtwin_device::signal::{EdgeMode, SignalError, savgol_coeffs, savgol_filter};
+use rigtwin_device::signal::{
+    EdgeMode, SignalError, cumulative_trapezoid, savgol_coeffs, savgol_filter,
+};
 
 use super::error::DiscrepancyError;
 use rigtwin_session::{Axes, Trial, TrialEntry};
@@ -77,6 +79,15 @@ pub struct BalanceSignals {
     pub u: [Vec<f64>; 2],
     /// Sensor force (hand on handle, through the sensor) through the balance filter, N.
     pub f: [Vec<f64>; 2],
+    /// Encoder position as recorded, m (for [`Self::fast_match`]).
+    pub q_raw: [Vec<f64>; 2],
+    /// Motor command as recorded, N (for [`Self::with_fast_velocity`]).
+    pub u_raw: [Vec<f64>; 2],
+    /// Sensor force as recorded, N (for [`Self::with_fast_velocity`]).
+    pub f_raw: [Vec<f64>; 2],
+    /// The carts' velocity above the smoothing's pass band, m/s: empty until
+    /// [`Self::with_fast_velocity`] fills it from the forces and the fitted masses.
+    pub v_fast: [Vec<f64>; 2],
     /// The balance filter's taps (`balance_filter`).
     pub force_taps: Vec<f64>,
     /// Evaluated sample indices.
@@ -150,6 +161,10 @@ impl BalanceSignals {
             a: [sg(&trial.x_m, 2)?, sg(&trial.y_m, 2)?],
             u: [force(ux)?, force(uy)?],
             f: [force(&trial.fx_n)?, force(&trial.fy_n)?],
+            q_raw: [trial.x_m.clone(), trial.y_m.clone()],
+            u_raw: [ux.clone(), uy.clone()],
+            f_raw: [trial.fx_n.clone(), trial.fy_n.clone()],
+            v_fast: [Vec::new(), Vec::new()],
             force_taps: taps,
             rows,
             axes: Axes::Both,
@@ -218,10 +233,131 @@ impl BalanceSignals {
             a: cut(&self.a),
             u: cut(&self.u),
             f: cut(&self.f),
+            q_raw: cut(&self.q_raw),
+            u_raw: cut(&self.u_raw),
+            f_raw: cut(&self.f_raw),
+            v_fast: if self.v_fast[0].is_empty() {
+                [Vec::new(), Vec::new()]
+            } else {
+                cut(&self.v_fast)
+            },
             force_taps: self.force_taps.clone(),
             rows: rows.iter().map(|r| r - lo).collect(),
             axes: self.axes,
             sensed: self.sensed,
+        }
+    }
+
+    /// The same signals with [`Self::v_fast`]: per axis, the velocity the forces give
+    /// the carts above the smoothing's pass band, `w − S(w)` with
+    /// `w = ∫ (g·u + F) / m dt` (the recorded command and sensor force, the fitted
+    /// moving mass `m` and motor force gain `g`) and `S` the position's
+    /// Savitzky–Golay smoothing. The smoothed velocity [`Self::v`] passes ~30 Hz; a
+    /// stiff position loop with a delay oscillates at ~200 Hz with velocities of a few
+    /// mm/s, as large as a rail friction's knee, and the friction force follows the
+    /// cart's whole velocity, `v + v_fast`. An axis whose mass is not positive and
+    /// finite keeps no fast part (zeros).
+    ///
+    /// # Errors
+    /// A signal-processing error (a non-finite recorded value).
+    pub fn with_fast_velocity(
+        mut self,
+        mass_kg: [f64; 2],
+        gain: [f64; 2],
+    ) -> Result<Self, DiscrepancyError> {
+        let dt = 1.0 / self.rate_hz;
+        let n = self.u_raw[0].len();
+        for axis in 0..2 {
+            let m = mass_kg[axis];
+            if !(m.is_finite() && m > 0.0 && gain[axis].is_finite()) {
+                self.v_fast[axis] = vec![0.0; n];
+                continue;
+            }
+            let acc: Vec<f64> = self.u_raw[axis]
+                .iter()
+                .zip(&self.f_raw[axis])
+                .map(|(u, f)| (gain[axis] * u + if self.sensed { *f } else { 0.0 }) / m)
+                .collect();
+            let w = cumulative_trapezoid(&acc, dt);
+            let slow = savgol_filter(&w, self.window, SMOOTHING_ORDER, 0, dt, EdgeMode::Interp)
+                .map_err(|source| DiscrepancyError::Signal {
+                    trial: self.id,
+                    source,
+                })?;
+            self.v_fast[axis] = w.iter().zip(&slow).map(|(a, b)| a - b).collect();
+        }
+        Ok(self)
+    }
+
+    /// How the encoder sees the fast velocity: per axis and lag `l` in
+    /// `−max_lag..=max_lag` samples, `(Σ p(t) e(t + l), Σ e(t)²)` over the evaluated
+    /// rows, with `p = q − S(q)` the recorded position's part above the smoothing and
+    /// `e = ∫ v_fast − S(∫ v_fast)` the same part of the position [`Self::v_fast`]
+    /// gives. The encoder's quantisation is uncorrelated with `e`, so summed over a
+    /// session `Σ p e / Σ e²` at the best lag is the factor by which the forces' fast
+    /// velocity is off (what the motor's current loop does above its band, and the
+    /// fitted mass's error, included) without the quantisation's bias.
+    ///
+    /// # Errors
+    /// A signal-processing error.
+    pub fn fast_match(&self, max_lag: usize) -> Result<[Vec<(f64, f64)>; 2], DiscrepancyError> {
+        let dt = 1.0 / self.rate_hz;
+        let high = |x: &[f64]| -> Result<Vec<f64>, DiscrepancyError> {
+            let slow = savgol_filter(x, self.window, SMOOTHING_ORDER, 0, dt, EdgeMode::Interp)
+                .map_err(|source| DiscrepancyError::Signal {
+                    trial: self.id,
+                    source,
+                })?;
+            Ok(x.iter().zip(&slow).map(|(a, b)| a - b).collect())
+        };
+        let mut out = [Vec::new(), Vec::new()];
+        for axis in 0..2 {
+            if self.v_fast[axis].len() != self.q_raw[axis].len() {
+                continue;
+            }
+            let p = high(&self.q_raw[axis])?;
+            let e = high(&cumulative_trapezoid(&self.v_fast[axis], dt))?;
+            let n = e.len() as isize;
+            let den: f64 = self.rows.iter().map(|&i| e[i] * e[i]).sum();
+            out[axis] = (-(max_lag as isize)..=max_lag as isize)
+                .map(|l| {
+                    let num = self
+                        .rows
+                        .iter()
+                        .filter_map(|&i| {
+                            let j = i as isize + l;
+                            (0..n).contains(&j).then(|| p[i] * e[j as usize])
+                        })
+                        .sum::<f64>();
+                    (num, den)
+                })
+                .collect();
+        }
+        Ok(out)
+    }
+
+    /// [`Self::v_fast`] of `axis` scaled by `factor` and moved `lag` samples later
+    /// (the ends hold their last value).
+    pub fn match_fast(&mut self, axis: usize, factor: f64, lag: isize) {
+        let v = &self.v_fast[axis];
+        let n = v.len() as isize;
+        if n == 0 {
+            return;
+        }
+        self.v_fast[axis] = (0..n)
+            .map(|i| factor * v[(i + lag).clamp(0, n - 1) as usize])
+            .collect();
+    }
+
+    /// The cart's whole velocity on `axis` at full rate: the smoothed one plus
+    /// [`Self::v_fast`] when it is filled.
+    #[must_use]
+    pub fn whole_velocity(&self, axis: usize) -> Vec<f64> {
+        let fast = &self.v_fast[axis];
+        if fast.len() == self.v[axis].len() {
+            self.v[axis].iter().zip(fast).map(|(v, f)| v + f).collect()
+        } else {
+            self.v[axis].clone()
         }
     }
 
