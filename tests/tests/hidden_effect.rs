@@ -408,6 +408,16 @@ fn friction_and_a_heavier_handle_are_both_named() {
     check_pair("rail-friction+handle-mass", 32);
 }
 
+/// Friction under a delayed actuator: the delay makes the stiff position loop ring at
+/// ~200 Hz (10–15 N in the command on this seed, the sweep's first), which dithers
+/// the cart's velocity by as much as the friction's knee; friction is fitted on the
+/// whole velocity (the fast part from the forces, matched to the encoder), and what it
+/// leaves shows the delay.
+#[test]
+fn friction_and_delay_are_both_named() {
+    check_pair("rail-friction+actuation-delay", 3000);
+}
+
 /// A delayed actuator with a rotated sensor: both reshape the balance (the command's
 /// timing, the force's frame), so the joint model carries both.
 #[test]

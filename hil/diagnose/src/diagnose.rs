@@ -1252,6 +1252,10 @@ pub(crate) fn with_fast_velocities(
             s.match_fast(axis, factor, lag);
         }
     }
+    // The recorded channels served the fast velocity only; a long log's copies go.
+    for s in &mut signals {
+        s.drop_recorded();
+    }
     Ok(signals)
 }
 

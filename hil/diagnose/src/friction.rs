@@ -183,7 +183,7 @@ mod tests {
                 .unwrap()
         };
         let (s_whole, sse_whole, b_whole) = best(true);
-        let (_, sse_smooth, b_smooth) = best(false);
+        let (s_smooth, sse_smooth, _) = best(false);
         let rel = |x: f64, want: f64| (x - want).abs() / want;
         assert!(
             rel(b_whole[2], COULOMB_N) < 0.05 && rel(b_whole[3], VISCOUS_N_S_PER_M) < 0.05,
@@ -197,7 +197,6 @@ mod tests {
             sse_whole < 0.5 * sse_smooth,
             "residual with the whole velocity {sse_whole}, smoothed {sse_smooth}"
         );
-        let (s_smooth, _, _) = best(false);
         let knee_smooth = smooth_velocity_m_per_s(s_smooth);
         assert!(
             knee_smooth > 1.4 * KNEE_M_PER_S,

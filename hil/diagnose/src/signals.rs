@@ -221,7 +221,10 @@ impl BalanceSignals {
         );
         let lo = first.saturating_sub(margin);
         let hi = (last + margin + 1).min(n);
-        let cut = |x: &[Vec<f64>; 2]| [x[0][lo..hi].to_vec(), x[1][lo..hi].to_vec()];
+        // A channel already dropped (`drop_recorded`) or not yet filled stays empty.
+        let cut = |x: &[Vec<f64>; 2]| {
+            [0, 1].map(|a| x[a].get(lo..hi).map_or_else(Vec::new, <[f64]>::to_vec))
+        };
         BalanceSignals {
             id: self.id,
             perturbed: self.perturbed,
@@ -236,11 +239,7 @@ impl BalanceSignals {
             q_raw: cut(&self.q_raw),
             u_raw: cut(&self.u_raw),
             f_raw: cut(&self.f_raw),
-            v_fast: if self.v_fast[0].is_empty() {
-                [Vec::new(), Vec::new()]
-            } else {
-                cut(&self.v_fast)
-            },
+            v_fast: cut(&self.v_fast),
             force_taps: self.force_taps.clone(),
             rows: rows.iter().map(|r| r - lo).collect(),
             axes: self.axes,
@@ -311,15 +310,15 @@ impl BalanceSignals {
             Ok(x.iter().zip(&slow).map(|(a, b)| a - b).collect())
         };
         let mut out = [Vec::new(), Vec::new()];
-        for axis in 0..2 {
-            if self.v_fast[axis].len() != self.q_raw[axis].len() {
+        for ((slot, q), fast) in out.iter_mut().zip(&self.q_raw).zip(&self.v_fast) {
+            if fast.len() != q.len() {
                 continue;
             }
-            let p = high(&self.q_raw[axis])?;
-            let e = high(&cumulative_trapezoid(&self.v_fast[axis], dt))?;
+            let p = high(q)?;
+            let e = high(&cumulative_trapezoid(fast, dt))?;
             let n = e.len() as isize;
             let den: f64 = self.rows.iter().map(|&i| e[i] * e[i]).sum();
-            out[axis] = (-(max_lag as isize)..=max_lag as isize)
+            *slot = (-(max_lag as isize)..=max_lag as isize)
                 .map(|l| {
                     let num = self
                         .rows
@@ -336,8 +335,8 @@ impl BalanceSignals {
         Ok(out)
     }
 
-    /// [`Self::v_fast`] of `axis` scaled by `factor` and moved `lag` samples later
-    /// (the ends hold their last value).
+    /// [`Self::v_fast`] of `axis` replaced by `factor · v_fast(t + lag)`, `lag` in
+    /// samples (the ends hold their last value): the best lag of [`Self::fast_match`].
     pub fn match_fast(&mut self, axis: usize, factor: f64, lag: isize) {
         let v = &self.v_fast[axis];
         let n = v.len() as isize;
@@ -347,6 +346,14 @@ impl BalanceSignals {
         self.v_fast[axis] = (0..n)
             .map(|i| factor * v[(i + lag).clamp(0, n - 1) as usize])
             .collect();
+    }
+
+    /// Frees the recorded copies ([`Self::q_raw`], [`Self::u_raw`], [`Self::f_raw`])
+    /// once [`Self::v_fast`] is matched: nothing else reads them.
+    pub fn drop_recorded(&mut self) {
+        for c in [&mut self.q_raw, &mut self.u_raw, &mut self.f_raw] {
+            *c = [Vec::new(), Vec::new()];
+        }
     }
 
     /// The cart's whole velocity on `axis` at full rate: the smoothed one plus
