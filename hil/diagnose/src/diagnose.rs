@@ -51,7 +51,7 @@ use super::decide::{
 use super::delay::ActuationDelay;
 use super::effect::{Effect, EffectKind};
 use super::error::DiscrepancyError;
-use super::friction::RailFriction;
+use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
 use super::hand::{HandJudgement, ReplicateTest, baseline_parameters, judge_hand};
 use super::joint::{Joint, Member, MemberParameters, refine};
@@ -1292,6 +1292,9 @@ struct CartJudgement {
     /// Degrees of freedom and critical t of the fold test.
     df: usize,
     t_critical: f64,
+    /// What the named causes' settings say that their parameters do not (for the
+    /// evidence).
+    notes: Vec<String>,
 }
 
 /// The cart balance: the nominal latency and baseline, every plant-side candidate's
@@ -1393,6 +1396,16 @@ fn judge_cart(
         .filter(|(c, _)| kept.iter().any(|k| Some(k.name) == c.kind()))
         .cloned()
         .collect();
+    let notes = members
+        .iter()
+        .filter(|(c, s)| c.kind() == Some(EffectKind::RailFriction) && with_fast_part(*s))
+        .map(|_| {
+            "rail-friction follows the carts' whole velocity: the smoothed one plus the fast part \
+             the forces give, matched to the encoder (chosen on held-out trials over the smoothed \
+             velocity alone: a ringing position loop dithers the Coulomb force)"
+                .to_string()
+        })
+        .collect();
     d.model = if members.is_empty() {
         d.baseline.clone()
     } else {
@@ -1411,6 +1424,7 @@ fn judge_cart(
         named: kept,
         df,
         t_critical,
+        notes,
     })
 }
 
@@ -1700,6 +1714,9 @@ fn decide(
         ranking = std::mem::take(&mut d.ranking);
     }
     d.evidence = evidence(d, &ranking, cart_nrmse, hand.judgement.as_ref());
+    if let Some(c) = cart {
+        d.evidence.extend(c.notes.iter().cloned());
+    }
     if !hand.corrected.is_empty() {
         d.evidence.push(format!(
             "the hand balance judged the sensor force {}",
