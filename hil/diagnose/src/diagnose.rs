@@ -1230,19 +1230,21 @@ pub(crate) fn with_fast_velocities(
         .map(|s| s.fast_match(max_lag))
         .collect::<Result<Vec<_>, _>>()?;
     for axis in 0..2 {
-        let mut total = vec![(0.0, 0.0); 2 * max_lag + 1];
+        let mut nums = vec![0.0; 2 * max_lag + 1];
+        let mut den = 0.0;
         for s in &sums {
-            for (t, (num, den)) in total.iter_mut().zip(&s[axis]) {
-                t.0 += num;
-                t.1 += den;
+            for (t, num) in nums.iter_mut().zip(&s[axis].0) {
+                *t += num;
             }
+            den += s[axis].1;
         }
-        let best = total
+        // The best lag explains the most of the encoder, `num² / den`: the largest `|num|`.
+        let best = nums
             .iter()
             .enumerate()
-            .filter(|(_, (_, den))| *den > 0.0)
-            .max_by(|a, b| (a.1.0 * a.1.0 / a.1.1).total_cmp(&(b.1.0 * b.1.0 / b.1.1)));
-        let (factor, lag) = best.map_or((0.0, 0), |(l, (num, den))| {
+            .filter(|_| den > 0.0)
+            .max_by(|a, b| (a.1 * a.1).total_cmp(&(b.1 * b.1)));
+        let (factor, lag) = best.map_or((0.0, 0), |(l, num)| {
             (
                 (num / den).clamp(0.0, FAST_MATCH_MAX),
                 l as isize - max_lag as isize,

@@ -57,12 +57,12 @@ impl Designed for RailFriction {
         let vs = smooth_velocity_m_per_s(s % SMOOTH_VELOCITY_STEPS);
         let whole = with_fast_part(s);
         let own = |axis: usize| -> Result<Vec<Vec<f64>>, DiscrepancyError> {
-            let v = if whole {
-                sig.whole_velocity(axis)
+            let knee = |v: &f64| (v / vs).tanh();
+            let raw: Vec<f64> = if whole {
+                sig.whole_velocity(axis).iter().map(knee).collect()
             } else {
-                sig.v[axis].clone()
+                sig.v[axis].iter().map(knee).collect()
             };
-            let raw: Vec<f64> = v.iter().map(|v| (v / vs).tanh()).collect();
             Ok(vec![
                 sig.at_rows(&sig.smooth(&raw)?),
                 sig.at_rows(&sig.v[axis]),

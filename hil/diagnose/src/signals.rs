@@ -277,58 +277,58 @@ impl BalanceSignals {
                 .zip(&self.f_raw[axis])
                 .map(|(u, f)| (gain[axis] * u + if self.sensed { *f } else { 0.0 }) / m)
                 .collect();
-            let w = cumulative_trapezoid(&acc, dt);
-            let slow = savgol_filter(&w, self.window, SMOOTHING_ORDER, 0, dt, EdgeMode::Interp)
-                .map_err(|source| DiscrepancyError::Signal {
-                    trial: self.id,
-                    source,
-                })?;
-            self.v_fast[axis] = w.iter().zip(&slow).map(|(a, b)| a - b).collect();
+            let fast = self.above_smoothing(&cumulative_trapezoid(&acc, dt))?;
+            self.v_fast[axis] = fast;
         }
         Ok(self)
     }
 
-    /// How the encoder sees the fast velocity: per axis and lag `l` in
-    /// `−max_lag..=max_lag` samples, `(Σ p(t) e(t + l), Σ e(t)²)` over the evaluated
-    /// rows, with `p = q − S(q)` the recorded position's part above the smoothing and
+    /// `x − S(x)`: the part of a full-rate channel above the position's Savitzky–Golay
+    /// smoothing `S` (the smoothing of [`Self::q`]).
+    fn above_smoothing(&self, x: &[f64]) -> Result<Vec<f64>, DiscrepancyError> {
+        let dt = 1.0 / self.rate_hz;
+        let slow = savgol_filter(x, self.window, SMOOTHING_ORDER, 0, dt, EdgeMode::Interp)
+            .map_err(|source| DiscrepancyError::Signal {
+                trial: self.id,
+                source,
+            })?;
+        Ok(x.iter().zip(&slow).map(|(a, b)| a - b).collect())
+    }
+
+    /// How the encoder sees the fast velocity: per axis, `Σ p(t) e(t + l)` for every
+    /// lag `l` in `−max_lag..=max_lag` samples, and `Σ e(t)²`, over the evaluated rows,
+    /// with `p = q_raw − q` the recorded position's part above the smoothing and
     /// `e = ∫ v_fast − S(∫ v_fast)` the same part of the position [`Self::v_fast`]
     /// gives. The encoder's quantisation is uncorrelated with `e`, so summed over a
     /// session `Σ p e / Σ e²` at the best lag is the factor by which the forces' fast
     /// velocity is off (what the motor's current loop does above its band, and the
-    /// fitted mass's error, included) without the quantisation's bias.
+    /// fitted mass's error, included) without the quantisation's bias. An axis without
+    /// a fast velocity gives no lags and 0.
     ///
     /// # Errors
     /// A signal-processing error.
-    pub fn fast_match(&self, max_lag: usize) -> Result<[Vec<(f64, f64)>; 2], DiscrepancyError> {
+    pub fn fast_match(&self, max_lag: usize) -> Result<[(Vec<f64>, f64); 2], DiscrepancyError> {
         let dt = 1.0 / self.rate_hz;
-        let high = |x: &[f64]| -> Result<Vec<f64>, DiscrepancyError> {
-            let slow = savgol_filter(x, self.window, SMOOTHING_ORDER, 0, dt, EdgeMode::Interp)
-                .map_err(|source| DiscrepancyError::Signal {
-                    trial: self.id,
-                    source,
-                })?;
-            Ok(x.iter().zip(&slow).map(|(a, b)| a - b).collect())
-        };
-        let mut out = [Vec::new(), Vec::new()];
-        for ((slot, q), fast) in out.iter_mut().zip(&self.q_raw).zip(&self.v_fast) {
+        let mut out = [(Vec::new(), 0.0), (Vec::new(), 0.0)];
+        for (axis, (nums, den)) in out.iter_mut().enumerate() {
+            let (q, fast) = (&self.q_raw[axis], &self.v_fast[axis]);
             if fast.len() != q.len() {
                 continue;
             }
-            let p = high(q)?;
-            let e = high(&cumulative_trapezoid(fast, dt))?;
+            let e = self.above_smoothing(&cumulative_trapezoid(fast, dt))?;
             let n = e.len() as isize;
-            let den: f64 = self.rows.iter().map(|&i| e[i] * e[i]).sum();
-            *slot = (-(max_lag as isize)..=max_lag as isize)
+            *den = self.rows.iter().map(|&i| e[i] * e[i]).sum();
+            let p: Vec<f64> = self.rows.iter().map(|&i| q[i] - self.q[axis][i]).collect();
+            *nums = (-(max_lag as isize)..=max_lag as isize)
                 .map(|l| {
-                    let num = self
-                        .rows
+                    self.rows
                         .iter()
-                        .filter_map(|&i| {
+                        .zip(&p)
+                        .filter_map(|(&i, p)| {
                             let j = i as isize + l;
-                            (0..n).contains(&j).then(|| p[i] * e[j as usize])
+                            (0..n).contains(&j).then(|| p * e[j as usize])
                         })
-                        .sum::<f64>();
-                    (num, den)
+                        .sum::<f64>()
                 })
                 .collect();
         }
