@@ -28,7 +28,7 @@ fn probe(modules: &str, pip: &str) {
     match probe {
         Ok(o) if o.status.success() => {}
         Ok(o) => panic!(
-            "python3 cannot import {modules} ({}): run `python3 -m pip install {pip}` (CI does, in .ci/run)",
+            "python3 cannot import {modules} ({}): run `python3 -m pip install {pip}` (the README's test command does)",
             String::from_utf8_lossy(&o.stderr).trim()
         ),
         Err(e) => {
