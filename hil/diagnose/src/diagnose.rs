@@ -1239,11 +1239,14 @@ pub(crate) fn with_fast_velocities(
             den += s[axis].1;
         }
         // The best lag explains the most of the encoder, `num² / den`: the largest `|num|`.
-        let best = nums
-            .iter()
-            .enumerate()
-            .filter(|_| den > 0.0)
-            .max_by(|a, b| (a.1 * a.1).total_cmp(&(b.1 * b.1)));
+        // Without a fast velocity (`den` 0) there is none.
+        let best = (den > 0.0)
+            .then(|| {
+                nums.iter()
+                    .enumerate()
+                    .max_by(|a, b| (a.1 * a.1).total_cmp(&(b.1 * b.1)))
+            })
+            .flatten();
         let (factor, lag) = best.map_or((0.0, 0), |(l, num)| {
             (
                 (num / den).clamp(0.0, FAST_MATCH_MAX),

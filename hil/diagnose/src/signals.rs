@@ -277,8 +277,7 @@ impl BalanceSignals {
                 .zip(&self.f_raw[axis])
                 .map(|(u, f)| (gain[axis] * u + if self.sensed { *f } else { 0.0 }) / m)
                 .collect();
-            let fast = self.above_smoothing(&cumulative_trapezoid(&acc, dt))?;
-            self.v_fast[axis] = fast;
+            self.v_fast[axis] = self.above_smoothing(&cumulative_trapezoid(&acc, dt))?;
         }
         Ok(self)
     }
