@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "86ae7617a6ab214dc56f44693e8c372ec511b30ae798f4a8c1608110e2d516ac",
+        "d1ab1303ffa71dbe88443d8f26c095047f3f01b588afd2389ed8e302242bece2",
     ),
     (
         "example-friction",
-        "907567b6fbb07427740f1fa1901be1cbd9d648588a6485f32321fa4a77a7aed7",
+        "28840de6a236511e2b34b7395c863494ee6fa6f206246d4b040ba45e7bfdbf2e",
     ),
     (
         "example-nuisance",
-        "5e87f52cea10f26267c7d1357c08db148c9698fd07311f1ace70c59b6119bd32",
+        "52e381e7c9bab20f870e34c4938d38af16edaf4512730f484565d080af8e1896",
     ),
     (
         "example-rotation-mass",
-        "9bb08db6da63b0bae520d88dac252c80414fce8cb738774287b81e48ef011b93",
+        "baa4a12394f7477fd82b5f799f2a5b722c9890eefda4bc5ba5c44a8bea29ae44",
     ),
 ];
 

@@ -5,7 +5,15 @@
 //! reference of what it would have done unperturbed: the mean of the session's
 //! unperturbed trials, each aligned at its own crossing of the perturbed trial's `y` at
 //! the onset (the rig fires the pulse when the measured `y` crosses a line, so this is
-//! the same moment of the reach). The device's Börner estimator removes the nominal
+//! the same moment of the reach), and resampled at the perturbed trial's pace: a lab's
+//! reaches vary in duration from trial to trial, and a reference that moves at the
+//! session's mean pace differs from a faster or slower trial by a velocity and a force
+//! that grow over the window, which the balance reads as a reflex's gain. With `κ` the
+//! ratio of the trial's speed along `y` to the reference's at the crossing
+//! ([`pace_ratio`]), the reference is read at `c + κ (i − k0)` and its velocities are
+//! scaled by `κ`, its accelerations by `κ²`, and its hand force as the rig's admittance
+//! renders a faster reach: the inertial part by `κ²`, the damping part by `κ`
+//! ([`at_pace`]). The device's Börner estimator removes the nominal
 //! movement with a high-pass instead and has no alignment to share; its smoothing
 //! does not suit a balance either (it differentiates to jerk), so the channels here are
 //! smoothed exactly like the cart balance's ([`super::signals`]: cubic Savitzky–Golay,
@@ -412,6 +420,58 @@ fn crossing(y: &[f64], level: f64, dir: f64) -> Option<f64> {
     })
 }
 
+/// Range of the pace ratio `κ` a reference is resampled at (the perturbed trial's
+/// speed over the reference's, both along `y` where they cross the onset's level). A
+/// lab's reaches vary in duration by ±10–20 % (the generator's `movement_spread` is
+/// 13 %); outside 0.7–1.4 the two reaches are not the same movement at another pace
+/// and the ratio is held at the edge.
+pub const PACE_RANGE: (f64, f64) = (0.7, 1.4);
+/// Slowest speed along `y` at the crossing for which the pace ratio is taken, m/s.
+/// Below it (an onset near a reach's start or end, where the speed is a few cm/s and
+/// the ratio of two small numbers is noise) the reference keeps its own pace.
+pub const PACE_MIN_SPEED_M_S: f64 = 0.05;
+
+/// How fast the perturbed trial moves against a reference at the same `y`: the ratio
+/// of their speeds along `y`, within [`PACE_RANGE`]; 1 when either is slower than
+/// [`PACE_MIN_SPEED_M_S`] or they move in opposite directions.
+#[must_use]
+pub fn pace_ratio(v_trial_m_s: f64, v_reference_m_s: f64) -> f64 {
+    let ratio = v_trial_m_s / v_reference_m_s;
+    if v_trial_m_s.abs() < PACE_MIN_SPEED_M_S
+        || v_reference_m_s.abs() < PACE_MIN_SPEED_M_S
+        || !ratio.is_finite()
+        || ratio <= 0.0
+    {
+        return 1.0;
+    }
+    ratio.clamp(PACE_RANGE.0, PACE_RANGE.1)
+}
+
+/// Channel `c` of [`Smoothed::ch`] of a reference resampled at pace `κ`, from the
+/// reference's own channels at the resampled time (`read(ch)`; `None` outside it).
+///
+/// A reach run `κ` times faster, `x'(t) = x(κ t)`, has its velocities `κ` times and its
+/// accelerations `κ²` times the reference's. Its hand force follows from the rig's
+/// admittance `M a + D v = F_hand` (manifest `[device]`, per axis): the inertial part
+/// scales with `κ²` and the damping part with `κ`, so
+/// `F' = κ² F + (κ − κ²) D v` and, differentiated, `Ḟ' = κ³ Ḟ + (κ² − κ³) D a`. What the
+/// admittance does not render (the rig's own errors) is scaled as inertia.
+fn at_pace(
+    c: usize,
+    kappa: f64,
+    damping_n_s_per_m: [f64; 2],
+    read: impl Fn(usize) -> Option<f64>,
+) -> Option<f64> {
+    let k2 = kappa * kappa;
+    Some(match c {
+        0 | 1 => read(c)?,
+        2 | 3 => kappa * read(c)?,
+        4 | 5 => k2 * read(c)?,
+        6 | 7 => k2 * read(c)? + (kappa - k2) * damping_n_s_per_m[c - 6] * read(c - 4)?,
+        _ => k2 * kappa * read(c)? + (k2 - k2 * kappa) * damping_n_s_per_m[c - 8] * read(c - 4)?,
+    })
+}
+
 /// Why a session's human side cannot be judged, or the responses.
 #[derive(Debug)]
 pub enum HandData {
@@ -460,6 +520,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
         .par_iter()
         .map(|(e, t)| smooth(e, t, rate, m_h))
         .collect::<Result<_, _>>()?;
+    let damping = session.manifest.device.damping_n_s_per_m;
     let lead = (HAND_LEAD_S * rate).ceil() as usize;
     let len = (HAND_WINDOW_S * rate).round() as usize + 1;
     let decim = ((rate / EVALUATION_RATE_HZ).round() as usize).max(1);
@@ -481,27 +542,38 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 return Ok(None);
             };
             let dir = p.ch[3][k0].signum();
-            let aligned: Vec<(usize, f64)> = refs
+            let v_trial = interp(&p.ch[3], k0f).unwrap_or(0.0);
+            let n = lead + len;
+            // Each reference: where it crosses the onset's level, and its pace ratio.
+            // Sample `i` of the trial reads the reference at `c + κ (i − k0f)`.
+            let aligned: Vec<(usize, f64, f64)> = refs
                 .iter()
                 .enumerate()
                 .filter_map(|(u, r)| crossing(&r.y_raw, level, dir).map(|c| (u, c)))
-                .filter(|(u, c)| {
-                    let n = refs[*u].y_raw.len() as f64;
-                    let first = c + (k0 - lead) as f64 - k0f;
-                    first >= 0.0 && first + (lead + len) as f64 <= n - 1.0
+                .map(|(u, c)| {
+                    let kappa = pace_ratio(v_trial, interp(&refs[u].ch[3], c).unwrap_or(0.0));
+                    (u, c, kappa)
+                })
+                .filter(|(u, c, kappa)| {
+                    let last = refs[*u].y_raw.len() as f64 - 1.0;
+                    let first = c - kappa * lead as f64;
+                    first >= 0.0 && c + kappa * len as f64 <= last
                 })
                 .collect();
             if aligned.len() < MIN_REFERENCES {
                 return Ok(None);
             }
-            let n = lead + len;
             let mut d: [Vec<f64>; 10] = std::array::from_fn(|_| vec![0.0; n]);
             for (c, dc) in d.iter_mut().enumerate() {
                 for (j, v) in dc.iter_mut().enumerate() {
                     let i = k0 - lead + j;
+                    let at = i as f64 - k0f;
                     let mean = aligned
                         .iter()
-                        .filter_map(|(u, cu)| interp(&refs[*u].ch[c], cu + i as f64 - k0f))
+                        .filter_map(|(u, cu, kappa)| {
+                            let read = |ch: usize| interp(&refs[*u].ch[ch], cu + kappa * at);
+                            at_pace(c, *kappa, damping, read)
+                        })
                         .sum::<f64>()
                         / aligned.len() as f64;
                     *v = p.ch[c][i] - mean;
@@ -558,6 +630,109 @@ pub fn lagged(x: &[f64], j: usize, lag: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn pace_ratio_is_the_speed_ratio_within_its_range() {
+        // A trial 10 % faster than its reference: κ = 1.1 (exact to rounding).
+        assert!((pace_ratio(0.33, 0.30) - 1.1).abs() < 1e-12);
+        assert!((pace_ratio(-0.27, -0.30) - 0.9).abs() < 1e-12);
+        // Twice as fast or half as fast is not the same reach: held at the range's edge.
+        assert_eq!(pace_ratio(0.6, 0.3), PACE_RANGE.1);
+        assert_eq!(pace_ratio(0.1, 0.3), PACE_RANGE.0);
+        // Too slow to compare, opposite directions or no speed at all: its own pace.
+        assert_eq!(pace_ratio(0.04, 0.3), 1.0);
+        assert_eq!(pace_ratio(0.3, -0.3), 1.0);
+        assert_eq!(pace_ratio(0.3, 0.0), 1.0);
+    }
+
+    #[test]
+    fn a_reference_at_another_pace_is_resampled_to_the_trial() {
+        // The same reach y(t) = sin(ω t) at two paces: the trial at ω, the reference at
+        // ω / κ. Read at c + κ (i − k0) (its velocity scaled by κ), the reference's
+        // position and velocity equal the trial's, to the linear interpolation's error.
+        let rate = 1000.0;
+        let omega = 3.0;
+        let kappa = 1.15;
+        let n = 2000;
+        let trial_y: Vec<f64> = (0..n).map(|i| (omega * i as f64 / rate).sin()).collect();
+        let trial_v: Vec<f64> = (0..n)
+            .map(|i| omega * (omega * i as f64 / rate).cos())
+            .collect();
+        let w = omega / kappa;
+        let ref_y: Vec<f64> = (0..n).map(|i| (w * i as f64 / rate).sin()).collect();
+        let ref_v: Vec<f64> = (0..n).map(|i| w * (w * i as f64 / rate).cos()).collect();
+        let k0 = 100.0;
+        let level = trial_y[100];
+        let c = crossing(&ref_y, level, 1.0).unwrap_or(f64::NAN);
+        let found = pace_ratio(trial_v[100], interp(&ref_v, c).unwrap_or(0.0));
+        assert!((found - kappa).abs() < 1e-3, "κ {found}");
+        for i in [100usize, 200, 300, 400] {
+            let at = c + found * (i as f64 - k0);
+            let y = interp(&ref_y, at).unwrap_or(f64::NAN);
+            let v = interp(&ref_v, at).unwrap_or(f64::NAN) * found;
+            // 1e-4 of a unit-amplitude sine: the interpolation's error and κ's 1e-3.
+            assert!(
+                (y - trial_y[i]).abs() < 1e-3,
+                "y at {i}: {y} against {}",
+                trial_y[i]
+            );
+            assert!(
+                (v - trial_v[i]).abs() < 3e-3 * omega,
+                "v at {i}: {v} against {}",
+                trial_v[i]
+            );
+        }
+    }
+
+    #[test]
+    fn a_faster_reach_under_the_admittance_needs_the_force_at_pace() {
+        // A reach x(t) = sin(ω t) on an admittance M a + D v = F, and the same reach κ
+        // times faster. The hand force the faster one needs, M κ² a + D κ v, and its
+        // rate, from the reference's channels at the resampled time: exact (the same
+        // algebra), to rounding.
+        let (m, d, omega, kappa) = (5.0, 15.0, 4.0, 1.2);
+        let t = 0.3_f64;
+        let (x, v, a, j) = (
+            (omega * t).sin(),
+            omega * (omega * t).cos(),
+            -omega * omega * (omega * t).sin(),
+            -omega.powi(3) * (omega * t).cos(),
+        );
+        let ch = [
+            x,
+            x,
+            v,
+            v,
+            a,
+            a,
+            m * a + d * v,
+            m * a + d * v,
+            m * j + d * a,
+            m * j + d * a,
+        ];
+        let read = |c: usize| Some(ch[c]);
+        let want = [
+            x,
+            x,
+            kappa * v,
+            kappa * v,
+            kappa * kappa * a,
+            kappa * kappa * a,
+            m * kappa * kappa * a + d * kappa * v,
+            m * kappa * kappa * a + d * kappa * v,
+            m * kappa.powi(3) * j + d * kappa * kappa * a,
+            m * kappa.powi(3) * j + d * kappa * kappa * a,
+        ];
+        for (c, w) in want.iter().enumerate() {
+            let got = at_pace(c, kappa, [d, d], read).unwrap_or(f64::NAN);
+            assert!(
+                (got - w).abs() < 1e-9 * (1.0 + w.abs()),
+                "channel {c}: {got} against {w}"
+            );
+        }
+        // Outside the reference: nothing.
+        assert!(at_pace(6, kappa, [d, d], |c| (c == 6).then_some(1.0)).is_none());
+    }
 
     #[test]
     fn crossing_is_interpolated_and_directed() {
