@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "d1ab1303ffa71dbe88443d8f26c095047f3f01b588afd2389ed8e302242bece2",
+        "a1bef8f370f24bac458eb46d0d069f6ee690cdf63f368d6915eed601eb561f49",
     ),
     (
         "example-friction",
-        "28840de6a236511e2b34b7395c863494ee6fa6f206246d4b040ba45e7bfdbf2e",
+        "ed19d1216cb1a5249893c9eeb2988fd769eb45b9d664888abc79e160f46e3d9b",
     ),
     (
         "example-nuisance",
-        "52e381e7c9bab20f870e34c4938d38af16edaf4512730f484565d080af8e1896",
+        "b063608b18d90b54b38b1c50f1d893f49f6aae9da19bd4051aa659eeec86378e",
     ),
     (
         "example-rotation-mass",
-        "baa4a12394f7477fd82b5f799f2a5b722c9890eefda4bc5ba5c44a8bea29ae44",
+        "9475ddfe47694591ea502f6b11aba6533100e200e8476ef0f2eaae73258f6c68",
     ),
 ];
 

@@ -56,14 +56,18 @@ pub const OUT_OF_CATALOG: [&str; 2] = ["cable-spring", "sensor-lowpass"];
 /// Pairs of effects a generated session may hide together ([`draw`] with `a+b`): two
 /// plant-side effects on one rig (friction and cogging, friction and a latency), one
 /// of each side (friction and a heavier handle; a rotated sensor and a
-/// heavier handle, the shared rig's), and a delay with a rotated sensor (both reshape
-/// the balance rather than add to it).
-pub const PAIRS: [&str; 5] = [
+/// heavier handle, the shared rig's), a delay with a rotated sensor (both reshape
+/// the balance rather than add to it), and two human-side effects on one subject and
+/// handle (a heavier handle with a reflex or a soft grip, a soft grip with a reflex).
+pub const PAIRS: [&str; 8] = [
     "rail-friction+force-ripple",
     "rail-friction+actuation-delay",
     "actuation-delay+sensor-rotation",
     "rail-friction+handle-mass",
     "sensor-rotation+handle-mass",
+    "stretch-reflex+handle-mass",
+    "grip-compliance+handle-mass",
+    "grip-compliance+stretch-reflex",
 ];
 
 /// A hidden effect (or several): its catalog name (`a+b` for several), the parameters a

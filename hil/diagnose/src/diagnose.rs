@@ -11,10 +11,12 @@
 //! every test is named; every other one is then fitted jointly with it
 //! ([`super::joint::Joint`], the named one's setting refined given the new one) and
 //! judged against the named one alone by the same tests; the best that passes is named
-//! too, and so on ([`Diagnosis::conditional`]). The parameters of every cart-balance
-//! cause come from the last joint fit. On the hand balance the best passing candidate
-//! is named. [`Diagnosis::causes`] lists them, the balance whose first cause gains more
-//! first; `cause` is the first, or `none`. Besides the statistics, a candidate must be
+//! too, and so on ([`Diagnosis::conditional`]). The hand balance selects its effects
+//! forward the same way ([`super::hand_joint::HandJoint`]: a handle mass on the
+//! handle's acceleration, a reflex on the hand's velocity, a grip's hand behind its
+//! spring). The parameters of every cause come from its balance's last joint fit.
+//! [`Diagnosis::causes`] lists them, the balance whose first cause gains more first;
+//! `cause` is the first, or `none`. Besides the statistics, a candidate must be
 //! physical and material, inside its search range and agree with its own binned
 //! evidence ([`super::decide`]); a candidate that fails is listed with the reason
 //! ([`Ranked::rejected`]).
@@ -53,7 +55,10 @@ use super::effect::{Effect, EffectKind};
 use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
-use super::hand::{HandJudgement, ReplicateTest, baseline_parameters, judge_hand};
+use super::hand::{
+    HandCandidate, HandJudgement, ReplicateTest, baseline_parameters, hand_candidate, judge_hand,
+};
+use super::hand_joint::{HandJoint, HandMember, fit_on_units, settle_grip_load};
 use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
@@ -259,11 +264,10 @@ pub struct Diagnosis {
     pub folds: usize,
     /// Catalog name of the strongest cause (the first of [`Self::causes`]), or `none`.
     pub cause: String,
-    /// Every named cause: on the cart balance by forward selection (the best passing
+    /// Every named cause: on each balance by forward selection (the best passing
     /// candidate, then the best passing one given it, and so on, with joint
-    /// parameters), on the hand balance the best passing candidate; the first cause of
-    /// each balance ordered by held-out gain, each balance's later causes after its
-    /// first.
+    /// parameters); the first cause of each balance ordered by held-out gain, each
+    /// balance's later causes after its first.
     pub causes: Vec<Cause>,
     /// The cause's parameters (units in the names); empty for `none`.
     pub parameters: BTreeMap<String, f64>,
@@ -439,6 +443,26 @@ impl Cause {
             given: r.given.clone(),
         })
     }
+
+    /// The cause with the parameters of a later joint fit (and their errors), its typed
+    /// effect (what `--write-model` writes) rebuilt from them.
+    ///
+    /// # Errors
+    /// [`DiscrepancyError::NotAnEffect`] when the parameters do not describe the effect.
+    fn refit(
+        &mut self,
+        (parameters, parameter_se): (BTreeMap<String, f64>, BTreeMap<String, f64>),
+    ) -> Result<(), DiscrepancyError> {
+        self.effect = Effect::from_parameters(self.name, &parameters).map_err(|e| {
+            DiscrepancyError::NotAnEffect {
+                name: self.name.name().to_string(),
+                why: e.to_string(),
+            }
+        })?;
+        self.parameters = parameters;
+        self.parameter_se = parameter_se;
+        Ok(())
+    }
 }
 
 /// How a cart-balance candidate is judged: against `base` (the nominal balance, or the
@@ -593,7 +617,7 @@ fn forward_select(
         let members = joint.member_parameters(fit.setting, &fit.beta, lat);
         for (i, (cause, (_, params))) in causes.iter_mut().zip(members).enumerate() {
             let fp: Vec<Vec<(String, f64)>> = per_fold.iter().map(|m| m[i].1.clone()).collect();
-            (cause.parameters, cause.parameter_se) = params_with_se(params, &fp);
+            cause.refit(params_with_se(params, &fp))?;
         }
         causes.push(Cause::of(&r)?);
         nrmse = r.extended_nrmse;
@@ -1444,6 +1468,8 @@ struct HandRanking {
     t_critical: Option<f64>,
     /// How the sensor's reading was corrected before judging, for the evidence.
     corrected: Vec<String>,
+    /// The causes named by forward selection, in order, with joint parameters.
+    named: Vec<Cause>,
 }
 
 /// The hand balance: judged again on the reading turned back by a rotation `named` on
@@ -1490,6 +1516,7 @@ fn rank_hand(
         hand = judge_hand(&s, opts.folds)?;
     }
     let mut ranked: Vec<Ranked> = Vec::new();
+    let mut hand_named = Vec::new();
     let (mut df_out, mut t_out) = (None, None);
     let judgement = match hand {
         Ok(h) => {
@@ -1526,6 +1553,15 @@ fn rank_hand(
             df_out = Some(df);
             t_out = Some(t_crit);
             ranked.sort_by(|a, b| b.gain.total_cmp(&a.gain));
+            let judge = HandJudge {
+                h: &h,
+                t_crit,
+                min_gain: opts.min_gain,
+                scale,
+            };
+            let (causes, rounds) = hand_forward_select(&judge, &ranked)?;
+            hand_named = causes;
+            d.conditional.extend(rounds);
             Some(h)
         }
         Err(why) => {
@@ -1544,6 +1580,7 @@ fn rank_hand(
         df: df_out,
         t_critical: t_out,
         corrected,
+        named: hand_named,
     })
 }
 
@@ -1558,67 +1595,204 @@ fn hand_row(
     min_gain: f64,
     scale: &SessionScale,
 ) -> Ranked {
-    let base_nrmse = h.baseline.nrmse();
-    let c = hf.candidate.as_ref();
-    let fit = &hf.fit;
-    let (nrmse, gain, _, _) = fold_stats(fit, &h.baseline, base_nrmse);
     // The test runs on independent units when the fitted ones average
     // repetitions, else on the fitted ones.
-    let (test_fit, test_base) = h
+    let test = h
         .replicates
         .as_ref()
-        .and_then(|rep| rep.fits.get(i).map(|f| (f, &rep.baseline)))
-        .unwrap_or((fit, &h.baseline));
-    let (_, _, fold_gains, t) = fold_stats(test_fit, test_base, test_base.nrmse());
-    let fold_params: Vec<Vec<(String, f64)>> = fit
-        .folds
-        .iter()
-        .map(|f| c.parameters(f.setting, &f.beta, h.fb_delay_s))
-        .collect();
-    let with_units = |mut p: Vec<(String, f64)>| {
-        // A reflex also in joint and endpoint units (from its gain).
-        if c.kind() == Some(EffectKind::StretchReflex)
+        .and_then(|rep| rep.fits.get(i).map(|f| (f, &rep.baseline)));
+    let judge = HandJudge {
+        h,
+        t_crit,
+        min_gain,
+        scale,
+    };
+    judge.row(hf.candidate.as_ref(), &hf.fit, &h.baseline, test, &[])
+}
+
+/// How a hand-balance candidate is judged: against `base` (the hand baseline, or the
+/// effects named so far), by the t-test on the independent units, the material floor
+/// on the gain and the physical checks of [`super::decide`].
+#[derive(Clone, Copy)]
+struct HandJudge<'a> {
+    h: &'a HandJudgement,
+    t_crit: f64,
+    min_gain: f64,
+    scale: &'a SessionScale,
+}
+
+impl HandJudge<'_> {
+    /// A reflex's parameters also in joint and endpoint units (from its gain).
+    fn with_units(
+        &self,
+        kind: Option<EffectKind>,
+        mut p: Vec<(String, f64)>,
+    ) -> Vec<(String, f64)> {
+        if kind == Some(EffectKind::StretchReflex)
             && let Some(g) = p.iter().find(|(k, _)| k == "gain").map(|(_, g)| *g)
         {
-            p.extend(h.reflex_units(g));
+            p.extend(self.h.reflex_units(g));
         }
         p
-    };
-    let fold_params: Vec<Vec<(String, f64)>> = fold_params.into_iter().map(with_units).collect();
-    let (parameters, parameter_se) = params_with_se(
-        with_units(c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
-        &fold_params,
-    );
-    let mut rejected = Vec::new();
-    if !c.physical(fit.setting, &fit.beta) {
-        rejected.push("unphysical: a negative mass or reflex gain".to_string());
     }
-    rejected.extend(immaterial(c.kind(), &parameters, scale, 0.0));
-    rejected.extend(at_edge(
-        c.kind(),
-        c.setting(fit.setting),
-        fit.setting,
-        c.settings(),
-    ));
-    Ranked {
-        name: c.name().to_string(),
-        kind: c.kind(),
-        balance: "hand".into(),
-        gain,
-        extended_nrmse: nrmse,
-        fold_gains,
-        t_statistic: t,
-        significant: t > t_crit && gain >= min_gain && rejected.is_empty(),
-        rejected,
-        evidence_r2: None,
-        parameters,
-        parameter_se,
-        given: Vec::new(),
+
+    /// The row of candidate `c` fitted as `fit` against `base` (`test`: the same two on
+    /// the independent units, when the fitted ones average repetitions), judged given
+    /// the effects `given`.
+    fn row(
+        &self,
+        c: &dyn HandCandidate,
+        fit: &CvFit,
+        base: &CvFit,
+        test: Option<(&CvFit, &CvFit)>,
+        given: &[String],
+    ) -> Ranked {
+        let h = self.h;
+        let (nrmse, gain, _, _) = fold_stats(fit, base, base.nrmse());
+        let (test_fit, test_base) = test.unwrap_or((fit, base));
+        let (_, _, fold_gains, t) = fold_stats(test_fit, test_base, test_base.nrmse());
+        let fold_params: Vec<Vec<(String, f64)>> = fit
+            .folds
+            .iter()
+            .map(|f| self.with_units(c.kind(), c.parameters(f.setting, &f.beta, h.fb_delay_s)))
+            .collect();
+        let (parameters, parameter_se) = params_with_se(
+            self.with_units(c.kind(), c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
+            &fold_params,
+        );
+        let mut rejected = Vec::new();
+        if !c.physical(fit.setting, &fit.beta) {
+            rejected.push("unphysical: a negative mass or reflex gain".to_string());
+        }
+        rejected.extend(immaterial(c.kind(), &parameters, self.scale, 0.0));
+        rejected.extend(at_edge(
+            c.kind(),
+            c.setting(fit.setting),
+            fit.setting,
+            c.settings(),
+        ));
+        Ranked {
+            name: c.name().to_string(),
+            kind: c.kind(),
+            balance: "hand".into(),
+            gain,
+            extended_nrmse: nrmse,
+            fold_gains,
+            t_statistic: t,
+            significant: t > self.t_crit && gain >= self.min_gain && rejected.is_empty(),
+            rejected,
+            evidence_r2: None,
+            parameters,
+            parameter_se,
+            given: given.to_vec(),
+        }
     }
 }
 
-/// The decision between the balances: the plant's causes in the order of selection and
-/// the hand's best passing candidate, the balance whose first cause gains more first;
+/// Forward selection on the hand balance, as on the cart balance: the best passing
+/// candidate of `ranked` is named; every other one is then fitted jointly with the named
+/// ones ([`HandJoint`]; the named ones' settings refined given it) and judged against
+/// the named ones alone by the same rules; the best that passes is named, and so on
+/// until none passes. Returns the causes in the order named, each with its parameters
+/// from the last joint fit, and every later round's rows.
+fn hand_forward_select(
+    judge: &HandJudge<'_>,
+    ranked: &[Ranked],
+) -> Result<(Vec<Cause>, Vec<Ranked>), DiscrepancyError> {
+    let h = judge.h;
+    let named = |kind: Option<EffectKind>| {
+        let fit = h.fits.iter().find(|f| f.candidate.kind() == kind)?;
+        let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(kind?)?);
+        Some((c, fit.fit.setting))
+    };
+    let Some((first, member)) = ranked
+        .iter()
+        .find(|r| r.significant)
+        .and_then(|r| named(r.kind).map(|m| (r, m)))
+    else {
+        return Ok((Vec::new(), Vec::new()));
+    };
+    let mut causes = vec![Cause::of(first)?];
+    let mut chosen: Vec<HandMember> = vec![member];
+    let mut rounds = Vec::new();
+    loop {
+        let rest: Vec<Arc<dyn HandCandidate>> = h
+            .fits
+            .iter()
+            .filter_map(|f| f.candidate.kind())
+            .filter(|k| chosen.iter().all(|(c, _)| c.kind() != Some(*k)))
+            .filter_map(hand_candidate)
+            .map(Arc::from)
+            .collect();
+        if rest.is_empty() {
+            break;
+        }
+        let given: Vec<String> = chosen.iter().map(|(c, _)| c.name().to_string()).collect();
+        let base = fit_on_units(h, &settle_grip_load(HandJoint::given(chosen.clone()), h)?)?;
+        let mut round: Vec<(Ranked, HandJoint, CvFit)> = rest
+            .into_par_iter()
+            .map(|c| {
+                let joint = settle_grip_load(
+                    HandJoint {
+                        fixed: chosen.clone(),
+                        next: c.clone(),
+                        grip_load_kg: 0.0,
+                    },
+                    h,
+                )?;
+                let fit = fit_on_units(h, &joint)?;
+                let mut members = chosen.clone();
+                members.push((c.clone(), fit.fit.setting));
+                let refined = super::hand_joint::refine(&members, h)?;
+                let (joint, fit) = if refined.iter().zip(&members).all(|(a, b)| a.1 == b.1) {
+                    (joint, fit)
+                } else {
+                    let joint = settle_grip_load(
+                        HandJoint {
+                            fixed: refined[..chosen.len()].to_vec(),
+                            next: c,
+                            grip_load_kg: 0.0,
+                        },
+                        h,
+                    )?;
+                    let fit = fit_on_units(h, &joint)?;
+                    (joint, fit)
+                };
+                let test = fit.test.as_ref().zip(base.test.as_ref());
+                let row = judge.row(&joint, &fit.fit, &base.fit, test, &given);
+                Ok((row, joint, fit.fit))
+            })
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+        round.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        let winner = round.iter().find(|(r, _, _)| r.significant).cloned();
+        rounds.extend(round.into_iter().map(|(r, _, _)| r));
+        let Some((r, joint, fit)) = winner else {
+            break;
+        };
+        // Every named member's parameters from the joint fit.
+        let fb = h.fb_delay_s;
+        let per_fold: Vec<_> = fit
+            .folds
+            .iter()
+            .map(|f| joint.member_parameters(f.setting, &f.beta, fb))
+            .collect();
+        let members = joint.member_parameters(fit.setting, &fit.beta, fb);
+        for (i, (cause, (kind, params))) in causes.iter_mut().zip(members).enumerate() {
+            let fp: Vec<Vec<(String, f64)>> = per_fold
+                .iter()
+                .map(|m| judge.with_units(kind, m[i].1.clone()))
+                .collect();
+            cause.refit(params_with_se(judge.with_units(kind, params), &fp))?;
+        }
+        causes.push(Cause::of(&r)?);
+        chosen = joint.fixed.clone();
+        chosen.push((joint.next.clone(), fit.setting));
+    }
+    Ok((causes, rounds))
+}
+
+/// The decision between the balances: each balance's causes in the order of selection,
+/// the balance whose first cause gains more first;
 /// the ranking, the rule and the evidence.
 fn decide(
     phase: &Phase<'_>,
@@ -1639,8 +1813,8 @@ fn decide(
     }
     d.extended_nrmse = d.baseline_nrmse;
     d.gain = d.baseline_nrmse.map(|_| 0.0);
-    // The plant's causes in the order of selection and the hand's best passing
-    // candidate, the balance whose first cause gains more first.
+    // Each balance's causes in the order of selection, the balance whose first cause
+    // gains more first.
     let plant_first = plant_named.first().and_then(|c| {
         plant_ranked
             .iter()
@@ -1648,7 +1822,7 @@ fn decide(
             .find(|r| r.kind == Some(c.name))
     });
     let hand_first = hand_ranked.iter().find(|r| r.significant);
-    let hand_named: Vec<Cause> = hand_first.map(Cause::of).transpose()?.into_iter().collect();
+    let hand_named: Vec<Cause> = hand.named.clone();
     let plant_leads = match (plant_first, hand_first) {
         (Some(p), Some(h)) => p.gain >= h.gain,
         (p, _) => p.is_some(),
@@ -1697,7 +1871,7 @@ fn decide(
                  a fitted law that explains at least {:.0} % of its binned partial residual. On the cart \
                  balance effects are selected forward: the best passing candidate is named, then each \
                  other one is fitted jointly with the named ones and judged against them alone by the \
-                 same rules, until none passes; on the hand balance the best passing candidate is named. \
+                 same rules, until none passes; the hand balance likewise. \
                  Laws outside the catalog (the library of hil/diagnose/src/unexplained.rs) compete on the \
                  cart balance: a cause they explain better and to which it adds nothing given them is \
                  rejected, and what they still explain given the causes is reported as unexplained",

@@ -144,6 +144,15 @@ impl Kin {
     /// between samples, from `δ = ΔF/k` at the start of the window.
     #[must_use]
     pub fn grip(r: &HandResponse, k: f64, tau: f64) -> Kin {
+        Kin::grip_loaded(r, k, tau, 0.0)
+    }
+
+    /// [`Kin::grip`] with a mass `load_kg` on the handle's side of the spring beyond
+    /// the manifest's: the spring carries the hand's force as the balance reads it plus
+    /// that mass's inertial force, `ΔF_hand + m Δa` (and its rate `ΔḞ_hand + m Δȧ`, the
+    /// handle's jerk by central differences).
+    #[must_use]
+    pub fn grip_loaded(r: &HandResponse, k: f64, tau: f64, load_kg: f64) -> Kin {
         let h = 1.0 / r.rate_hz;
         let phi = (-h / tau).exp();
         // First-order hold: `τ δ̇ + δ = u` with `u = F/k` linear between samples gives
@@ -151,9 +160,24 @@ impl Kin {
         let ramp = 1.0 - tau / h * (1.0 - phi);
         let mut out = Kin::rigid(r);
         for axis in 0..2 {
-            let f = &r.df[axis];
-            let fd = &r.dfd[axis];
-            let n = f.len();
+            let a = &r.da[axis];
+            let n = a.len();
+            let f: Vec<f64> = r.df[axis]
+                .iter()
+                .zip(a)
+                .map(|(f, a)| f + load_kg * a)
+                .collect();
+            let fd: Vec<f64> = (0..n)
+                .map(|i| {
+                    let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                    let jerk = if hi > lo {
+                        (a[hi] - a[lo]) * r.rate_hz / (hi - lo) as f64
+                    } else {
+                        0.0
+                    };
+                    r.dfd[axis][i] + load_kg * jerk
+                })
+                .collect();
             let mut d = vec![0.0; n];
             d[0] = f[0] / k;
             for i in 1..n {
@@ -268,6 +292,42 @@ pub trait HandCandidate: Sync + Send {
         let _ = (s, beta);
         true
     }
+    /// The hand's kinematics the effect puts in the balance at setting `s` (a grip's
+    /// hand behind its spring), or `None` for the handle's.
+    fn hand_kin(&self, r: &HandResponse, s: usize) -> Option<Kin> {
+        let _ = (r, s);
+        None
+    }
+    /// Regressors the effect adds to the baseline's (after them, in [`Self::rows`]).
+    fn extra_columns(&self) -> usize {
+        self.columns().saturating_sub(base_columns())
+    }
+    /// The effect's own regressors of row `axis` at sample `j` and setting `s`, with the
+    /// hand's kinematics `kin` of the balance (`out` of length [`Self::extra_columns`]).
+    fn extra(&self, r: &HandResponse, kin: &Kin, s: usize, axis: usize, j: usize, out: &mut [f64]) {
+        let _ = (r, kin, s, axis, j, out);
+    }
+}
+
+/// The rows of an effect's candidate: the baseline's on the effect's kinematics
+/// ([`HandCandidate::hand_kin`]) with its own regressors ([`HandCandidate::extra`]) after
+/// them.
+fn effect_rows(
+    c: &dyn HandCandidate,
+    r: &HandResponse,
+    s: usize,
+    fb_delay_s: f64,
+    f: &mut dyn FnMut(&[f64], f64, f64),
+) {
+    let kin = c.hand_kin(r, s).unwrap_or_else(|| Kin::rigid(r));
+    visit_rows(
+        r,
+        &kin,
+        lag(r, fb_delay_s),
+        c.columns(),
+        |axis, j, out| c.extra(r, &kin, s, axis, j, out),
+        f,
+    );
 }
 
 /// The weighting of the hand balance's rows: generalised least squares for a residual
@@ -660,16 +720,21 @@ impl HandCandidate for HandleMass {
     fn columns(&self) -> usize {
         base_columns() + 1
     }
-    fn rows(&self, r: &HandResponse, _s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
-        let kin = Kin::rigid(r);
-        visit_rows(
-            r,
-            &kin,
-            lag(r, fb),
-            self.columns(),
-            |axis, j, out| out[0] = kin.a[axis][j],
-            f,
-        );
+    fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
+        effect_rows(self, r, s, fb, f);
+    }
+    /// The mass rides on the handle: its force is `m_extra` times the handle's
+    /// acceleration, whatever the grip does to the hand's.
+    fn extra(
+        &self,
+        r: &HandResponse,
+        _kin: &Kin,
+        _s: usize,
+        axis: usize,
+        j: usize,
+        out: &mut [f64],
+    ) {
+        out[0] = r.da[axis][j];
     }
     fn parameters(&self, _s: usize, beta: &[f64], _fb: f64) -> Vec<(String, f64)> {
         vec![(
@@ -704,19 +769,13 @@ impl HandCandidate for StretchReflex {
         base_columns() + 1
     }
     fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
-        let kin = Kin::rigid(r);
+        effect_rows(self, r, s, fb, f);
+    }
+    /// The muscles stretch with the hand: the reflex answers the hand's velocity.
+    fn extra(&self, r: &HandResponse, kin: &Kin, s: usize, axis: usize, j: usize, out: &mut [f64]) {
         let l = lag(r, reflex_delay_s(s));
-        visit_rows(
-            r,
-            &kin,
-            lag(r, fb),
-            self.columns(),
-            |axis, j, out| {
-                let vl = Vector2::new(lagged(&kin.v[0], j, l), lagged(&kin.v[1], j, l));
-                out[0] = (r.s[j] * vl)[axis];
-            },
-            f,
-        );
+        let vl = Vector2::new(lagged(&kin.v[0], j, l), lagged(&kin.v[1], j, l));
+        out[0] = (r.s[j] * vl)[axis];
     }
     fn parameters(&self, s: usize, beta: &[f64], _fb: f64) -> Vec<(String, f64)> {
         vec![
@@ -733,7 +792,7 @@ impl HandCandidate for StretchReflex {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct GripCompliance;
 
-fn grip_setting(s: usize) -> (f64, f64) {
+pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
     let (lo, hi, n) = GRIP_STIFFNESS_N_PER_M;
     let (ki, ti) = (s / GRIP_TIME_S.len(), s % GRIP_TIME_S.len());
     let k = lo * (hi / lo).powf(ki as f64 / (n - 1) as f64);
@@ -754,15 +813,11 @@ impl HandCandidate for GripCompliance {
         base_columns()
     }
     fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
+        effect_rows(self, r, s, fb, f);
+    }
+    fn hand_kin(&self, r: &HandResponse, s: usize) -> Option<Kin> {
         let (k, tau) = grip_setting(s);
-        visit_rows(
-            r,
-            &Kin::grip(r, k, tau),
-            lag(r, fb),
-            self.columns(),
-            |_, _, _| {},
-            f,
-        );
+        Some(Kin::grip(r, k, tau))
     }
     fn parameters(&self, s: usize, _beta: &[f64], _fb: f64) -> Vec<(String, f64)> {
         let (k, tau) = grip_setting(s);
@@ -801,6 +856,8 @@ pub struct ReplicateTest {
     pub baseline: CvFit,
     /// The candidates' fits, in the order of [`HandJudgement::fits`].
     pub fits: Vec<CvFit>,
+    /// The repetitions themselves (for the joint fits of forward selection).
+    pub units: Vec<HandResponse>,
 }
 
 impl ReplicateTest {
@@ -876,7 +933,7 @@ impl HandJudgement {
 
 /// The hand balance's candidate for a catalog effect (`None` for the cart balance's):
 /// every human-side effect of [`EffectKind`] has one.
-fn hand_candidate(kind: EffectKind) -> Option<Box<dyn HandCandidate>> {
+pub(crate) fn hand_candidate(kind: EffectKind) -> Option<Box<dyn HandCandidate>> {
     match kind {
         EffectKind::StretchReflex => Some(Box::new(StretchReflex)),
         EffectKind::GripCompliance => Some(Box::new(GripCompliance)),
@@ -986,6 +1043,7 @@ pub fn judge_hand(
                 folds,
                 baseline,
                 fits,
+                units,
             })
         }
         None => None,
@@ -1033,16 +1091,12 @@ mod tests {
         }
     }
 
-    /// A response built exactly by the baseline's law, with a non-symmetric `D` and `K`
-    /// (what a moving, torque-bearing arm shows), gives those matrices and the feedback
-    /// gain back to round-off: the columns are the law's, in the order the parameters
-    /// are named.
-    #[test]
-    fn baseline_recovers_a_non_symmetric_impedance() {
+    /// A response moving by two incommensurate motions per axis (so that x, v, a and the
+    /// lagged terms are independent regressors), with a fixed arm inertia and feedback
+    /// shape, and no force yet: 400 samples at 1 kHz, rows from the 100th.
+    fn moving_response() -> HandResponse {
         let (rate, n) = (1000.0, 400);
         let t = |i: usize| i as f64 / rate;
-        // Two incommensurate motions per axis, so that x, v, a and the lagged terms are
-        // independent regressors.
         let pos = |i: usize, f: [f64; 2]| {
             1e-3 * ((2.0 * PI * f[0] * t(i)).sin() + 0.6 * (2.0 * PI * f[1] * t(i)).cos())
         };
@@ -1067,6 +1121,17 @@ mod tests {
         r.m_arm = vec![m; n];
         r.s = vec![sh; n];
         r.rows = (100..n).collect();
+        r
+    }
+
+    /// A response built exactly by the baseline's law, with a non-symmetric `D` and `K`
+    /// (what a moving, torque-bearing arm shows), gives those matrices and the feedback
+    /// gain back to round-off: the columns are the law's, in the order the parameters
+    /// are named.
+    #[test]
+    fn baseline_recovers_a_non_symmetric_impedance() {
+        let mut r = moving_response();
+        let (rate, n, m, sh) = (r.rate_hz, r.df[0].len(), r.m_arm[0], r.s[0]);
         let d = Matrix2::new(12.0, -3.0, 5.0, 9.0);
         let k = Matrix2::new(420.0, 60.0, -140.0, 310.0);
         let p = 480.0;
@@ -1136,6 +1201,141 @@ mod tests {
         let g = &hand_grams(&HandBaseline, &r, fb, &mixing)[0];
         let beta = recovers(g, "with offsets");
         assert!(g.sse(&beta) < 1e-12 * g.norm_sq, "offsets left a residual");
+    }
+
+    /// A response with a handle mass *and* a stretch reflex, built exactly by their
+    /// joint law: the joint model (the mass named, the reflex searched) gives both back
+    /// to round-off, at the reflex's own delay, and its parameters are read per member;
+    /// the reflex alone, at the same delay, leaves a residual (the mass's force) and a
+    /// gain that is off.
+    #[test]
+    fn a_handle_mass_and_a_reflex_are_fitted_jointly() {
+        use crate::hand_joint::HandJoint;
+        use std::sync::Arc;
+        let mut r = moving_response();
+        let (rate, n, m, sh) = (r.rate_hz, r.df[0].len(), r.m_arm[0], r.s[0]);
+        let (d, k, p, fb) = (
+            Matrix2::new(12.0, -3.0, 5.0, 9.0),
+            Matrix2::new(420.0, 60.0, -140.0, 310.0),
+            480.0,
+            0.06,
+        );
+        let (mass, gain, delay_s) = (0.4, 150.0, 0.025);
+        let rho = feedback_velocity_ratio_s();
+        let v_at =
+            |j: usize, lag: f64| Vector2::new(lagged(&r.dv[0], j, lag), lagged(&r.dv[1], j, lag));
+        let x_at =
+            |j: usize, lag: f64| Vector2::new(lagged(&r.dx[0], j, lag), lagged(&r.dx[1], j, lag));
+        let df: Vec<Vector2<f64>> = (0..n)
+            .map(|j| {
+                let a = Vector2::new(r.da[0][j], r.da[1][j]);
+                -((m + Matrix2::identity() * mass) * a
+                    + d * v_at(j, 0.0)
+                    + k * x_at(j, 0.0)
+                    + p * sh * (x_at(j, fb * rate) + rho * v_at(j, fb * rate))
+                    + gain * sh * v_at(j, delay_s * rate))
+            })
+            .collect();
+        for axis in 0..2 {
+            r.df[axis] = df.iter().map(|f| f[axis]).collect();
+        }
+        let setting = ((delay_s * 1e3 - REFLEX_DELAY_MS.0) / REFLEX_DELAY_MS.2).round() as usize;
+        let fit = |c: &dyn HandCandidate| {
+            let mut g = Gram::new(c.columns());
+            c.rows(&r, setting, fb, &mut |x, y, nrm| g.push(x, y, nrm));
+            let beta = g.solve().unwrap_or_default();
+            (g.sse(&beta) / g.norm_sq, beta)
+        };
+        let joint = HandJoint {
+            fixed: vec![(Arc::new(HandleMass), 0)],
+            next: Arc::new(StretchReflex),
+            grip_load_kg: 0.0,
+        };
+        let (rel_sse, beta) = fit(&joint);
+        assert!(
+            rel_sse < 1e-12,
+            "the joint law leaves {rel_sse} of the force"
+        );
+        let params = joint.member_parameters(setting, &beta, fb);
+        let value = |i: usize, key: &str| {
+            params[i]
+                .1
+                .iter()
+                .find(|(k, _)| k == key)
+                .map_or(f64::NAN, |(_, v)| *v)
+        };
+        assert!(
+            (value(0, "extra_mass_kg") - mass).abs() < 1e-6,
+            "mass {}",
+            value(0, "extra_mass_kg")
+        );
+        assert!(
+            (value(1, "gain") - gain).abs() < 1e-6 * gain,
+            "gain {}",
+            value(1, "gain")
+        );
+        assert!((value(1, "delay_ms") - 25.0).abs() < 1e-9);
+        assert!(joint.physical(setting, &beta));
+        // Alone, the reflex cannot carry the mass's force: a residual of more than 1e-6
+        // of the force and a gain more than 1 % off.
+        let (rel_alone, beta_alone) = fit(&StretchReflex);
+        let gain_alone = beta_alone.last().copied().unwrap_or(f64::NAN);
+        assert!(rel_alone > 1e-6, "the reflex alone leaves only {rel_alone}");
+        assert!(
+            (gain_alone - gain).abs() > 0.01 * gain,
+            "the reflex alone finds {gain_alone}"
+        );
+    }
+
+    /// A grip loaded with a mass on the handle's side is the grip under the force the
+    /// spring then carries, `ΔF + m Δa` with its rate `ΔḞ + m Δȧ`: the same kinematics as
+    /// the unloaded grip of a response whose force has that added (to the central
+    /// difference's round-off), and unloaded it is the grip itself, bit for bit.
+    #[test]
+    fn a_loaded_grip_carries_the_mass_s_force() {
+        let mut r = moving_response();
+        let n = r.df[0].len();
+        for axis in 0..2 {
+            r.df[axis] = (0..n)
+                .map(|i| 2.0 * r.da[axis][i] + 0.1 * r.dv[axis][i])
+                .collect();
+            r.dfd[axis] = (0..n)
+                .map(|i| {
+                    let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                    2.0 * (r.da[axis][hi] - r.da[axis][lo]) * r.rate_hz / (hi - lo) as f64
+                        + 0.1 * r.da[axis][i]
+                })
+                .collect();
+        }
+        let (k, tau, m) = (3000.0, 5e-3, 0.6);
+        let unloaded = Kin::grip(&r, k, tau);
+        let same = Kin::grip_loaded(&r, k, tau, 0.0);
+        assert!(unloaded.x == same.x && unloaded.v == same.v && unloaded.a == same.a);
+        let loaded = Kin::grip_loaded(&r, k, tau, m);
+        let mut heavier = r.clone();
+        for axis in 0..2 {
+            for i in 0..n {
+                let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+                heavier.df[axis][i] += m * r.da[axis][i];
+                heavier.dfd[axis][i] +=
+                    m * (r.da[axis][hi] - r.da[axis][lo]) * r.rate_hz / (hi - lo) as f64;
+            }
+        }
+        let want = Kin::grip(&heavier, k, tau);
+        for axis in 0..2 {
+            for i in 0..n {
+                assert!((loaded.x[axis][i] - want.x[axis][i]).abs() < 1e-12);
+                assert!(
+                    (loaded.a[axis][i] - want.a[axis][i]).abs()
+                        < 1e-9 * (1.0 + want.a[axis][i].abs())
+                );
+            }
+        }
+        // The load moves the hand: a 0.6 kg mass under these accelerations is not nothing.
+        let moved = (0..n)
+            .map(|i| (loaded.x[1][i] - unloaded.x[1][i]).abs())
+            .fold(0.0, f64::max);
+        assert!(moved > 1e-7, "the load moved the hand by at most {moved} m");
     }
 
     /// A residual that is first-order autoregressive in time with the weighting's own

@@ -13,6 +13,7 @@
 //! | `joint.rs` | forward selection's joint model: named effects at their settings plus one more ([`Joint`]) |
 //! | `hand_signals.rs` | the variational response to each force pulse, against aligned unperturbed trials |
 //! | `hand.rs` | the hand balance and the human-side catalog effects ([`HandCandidate`]) |
+//! | `hand_joint.rs` | forward selection's joint model on the hand balance (`HandJoint`) |
 //! | `gram.rs` | least squares as sums of per-trial sufficient statistics |
 //! | `crossval.rs` | folds of whole trials; held-out error |
 //! | `stats.rs` | Student's t and the jackknife behind the chance threshold |
@@ -35,6 +36,7 @@ mod error;
 mod friction;
 mod gram;
 mod hand;
+mod hand_joint;
 mod hand_signals;
 mod joint;
 mod model;

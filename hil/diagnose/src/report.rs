@@ -182,7 +182,7 @@ pub fn table(d: &Diagnosis) -> String {
     if !d.conditional.is_empty() {
         let _ = writeln!(
             out,
-            "forward selection on the cart balance: each candidate fitted jointly with the causes named before it, its gain against them alone"
+            "forward selection on each balance: each candidate fitted jointly with the causes named before it on its balance, its gain against them alone"
         );
         for r in &d.conditional {
             let verdict = verdict(
@@ -193,9 +193,10 @@ pub fn table(d: &Diagnosis) -> String {
             );
             let _ = writeln!(
                 out,
-                "  given {:<30} {:<16} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
+                "  given {:<30} {:<16} {:<7} {:>8.1} {:>9.4} {:>8.1}  {:<8} {}",
                 r.given.join(" + "),
                 r.name,
+                r.balance,
                 100.0 * r.gain,
                 r.extended_nrmse,
                 r.t_statistic,

@@ -1,0 +1,299 @@
+//! Forward selection on the hand balance: the human-side effects already named, each at
+//! the setting it was named with, and one more candidate searched over its settings.
+//!
+//! A subject can hold a heavy handle *and* answer a stretch with a reflex; a grip can be
+//! soft on a heavy handle. Fitted alone, one effect's candidate takes up part of the
+//! other's response, and the second is judged against a baseline that still carries
+//! the first one's. [`HandJoint`] fits them together, like the cart balance's
+//! `joint.rs`: the baseline's regressors on the hand's kinematics (through the grip's
+//! spring when a grip is a member), then every member's own regressors. A handle mass
+//! acts on the handle's acceleration and a reflex on the hand's velocity
+//! ([`HandCandidate::extra`]), so the members combine without double counting. A grip's
+//! spring carries the extra mass's inertial force as well as the hand's, so with both
+//! members the hand's kinematics depend on the mass ([`HandJoint::grip_load_kg`],
+//! settled by [`settle_grip_load`]).
+//! Its held-out gain is measured against the named effects alone
+//! ([`HandJoint::given`]), so it is the gain of the new effect *given* the others.
+
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use super::crossval::{CvFit, Folds, cross_validate};
+use super::error::DiscrepancyError;
+use super::hand::{
+    HandBaseline, HandCandidate, HandJudgement, Kin, base_columns, grip_setting, hand_grams,
+    visit_rows,
+};
+use super::hand_signals::HandResponse;
+use crate::effect::EffectKind;
+
+/// A named human-side effect at the setting it was named with.
+pub type HandMember = (Arc<dyn HandCandidate>, usize);
+
+/// A member's effect and catalog parameters (units in the names).
+pub type HandMemberParameters = (Option<EffectKind>, Vec<(String, f64)>);
+
+/// Named effects at fixed settings plus one candidate searched over its settings.
+#[derive(Clone)]
+pub struct HandJoint {
+    /// The effects already named, each with its setting.
+    pub fixed: Vec<HandMember>,
+    /// The candidate searched.
+    pub next: Arc<dyn HandCandidate>,
+    /// Mass on the handle's side of a grip member's spring beyond the manifest's, kg:
+    /// the spring carries `ΔF_hand + m Δa` ([`Kin::grip_loaded`]). 0 without a grip or a
+    /// handle-mass member.
+    pub grip_load_kg: f64,
+}
+
+impl std::fmt::Debug for HandJoint {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HandJoint")
+            .field(
+                "fixed",
+                &self
+                    .fixed
+                    .iter()
+                    .map(|(c, s)| (c.name(), *s))
+                    .collect::<Vec<_>>(),
+            )
+            .field("next", &self.next.name())
+            .field("grip_load_kg", &self.grip_load_kg)
+            .finish()
+    }
+}
+
+impl HandJoint {
+    /// The named effects alone (the baseline of the next round's test): the joint model
+    /// whose new member is the hand baseline.
+    #[must_use]
+    pub fn given(fixed: Vec<HandMember>) -> HandJoint {
+        HandJoint {
+            fixed,
+            next: Arc::new(HandBaseline),
+            grip_load_kg: 0.0,
+        }
+    }
+
+    /// Every member with its setting, the new one at `s` last.
+    fn members(&self, s: usize) -> impl Iterator<Item = (&dyn HandCandidate, usize)> {
+        self.fixed
+            .iter()
+            .map(|(c, cs)| (c.as_ref(), *cs))
+            .chain([(self.next.as_ref(), s)])
+    }
+
+    /// The coefficients of member `i` (`fixed` in order, then `next` at
+    /// `i == fixed.len()`) as that member alone lays them out: the baseline's, then its own.
+    #[must_use]
+    pub fn slice(&self, i: usize, beta: &[f64]) -> Vec<f64> {
+        let nb = base_columns();
+        let own: Vec<usize> = self.members(0).map(|(c, _)| c.extra_columns()).collect();
+        let start = nb + own[..i].iter().sum::<usize>();
+        let len = own.get(i).copied().unwrap_or(0);
+        beta.iter()
+            .take(nb)
+            .chain(beta.iter().skip(start).take(len))
+            .copied()
+            .collect()
+    }
+
+    /// Every member's effect and catalog parameters from the joint fit at setting `s` of
+    /// the new member, named effects first.
+    #[must_use]
+    pub fn member_parameters(
+        &self,
+        s: usize,
+        beta: &[f64],
+        fb_delay_s: f64,
+    ) -> Vec<HandMemberParameters> {
+        self.members(s)
+            .enumerate()
+            .map(|(i, (c, cs))| (c.kind(), c.parameters(cs, &self.slice(i, beta), fb_delay_s)))
+            .collect()
+    }
+}
+
+impl HandCandidate for HandJoint {
+    fn kind(&self) -> Option<EffectKind> {
+        self.next.kind()
+    }
+    fn name(&self) -> &'static str {
+        self.next.name()
+    }
+    fn settings(&self) -> usize {
+        self.next.settings()
+    }
+    fn setting(&self, s: usize) -> (&'static str, f64) {
+        self.next.setting(s)
+    }
+    fn columns(&self) -> usize {
+        base_columns()
+            + self
+                .members(0)
+                .map(|(c, _)| c.extra_columns())
+                .sum::<usize>()
+    }
+    fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
+        // The hand's kinematics: a grip member's (at most one grip is a member),
+        // loaded with the extra mass when one is a member too.
+        let kin = self
+            .members(s)
+            .find_map(|(c, cs)| {
+                if self.grip_load_kg != 0.0 && c.kind() == Some(EffectKind::GripCompliance) {
+                    let (k, tau) = grip_setting(cs);
+                    Some(Kin::grip_loaded(r, k, tau, self.grip_load_kg))
+                } else {
+                    c.hand_kin(r, cs)
+                }
+            })
+            .unwrap_or_else(|| Kin::rigid(r));
+        let members: Vec<(&dyn HandCandidate, usize)> = self.members(s).collect();
+        visit_rows(
+            r,
+            &kin,
+            fb * r.rate_hz,
+            self.columns(),
+            |axis, j, out| {
+                let mut at = 0;
+                for (c, cs) in &members {
+                    let n = c.extra_columns();
+                    c.extra(r, &kin, *cs, axis, j, &mut out[at..at + n]);
+                    at += n;
+                }
+            },
+            f,
+        );
+    }
+    fn parameters(&self, s: usize, beta: &[f64], fb: f64) -> Vec<(String, f64)> {
+        self.next
+            .parameters(s, &self.slice(self.fixed.len(), beta), fb)
+    }
+    fn physical(&self, s: usize, beta: &[f64]) -> bool {
+        self.members(s)
+            .enumerate()
+            .all(|(i, (c, cs))| c.physical(cs, &self.slice(i, beta)))
+    }
+}
+
+/// A candidate's fit on the hand balance's units and, when the units average
+/// repetitions, on the independent repetitions the test runs on.
+#[derive(Debug)]
+pub struct HandJointFit {
+    /// On the fitted units (parameters, gain).
+    pub fit: CvFit,
+    /// On the repetitions (the test), when there are.
+    pub test: Option<CvFit>,
+}
+
+/// Cross-validates `c` on the units and the repetitions of `h`, with its feedback delay
+/// and weighting.
+///
+/// # Errors
+/// [`DiscrepancyError::Singular`] when a fold cannot be fitted.
+pub fn fit_on_units(
+    h: &HandJudgement,
+    c: &dyn HandCandidate,
+) -> Result<HandJointFit, DiscrepancyError> {
+    let cv = |units: &[HandResponse], folds: &Folds| {
+        let grams: Vec<_> = units
+            .par_iter()
+            .map(|r| hand_grams(c, r, h.fb_delay_s, &h.whitening))
+            .collect();
+        cross_validate(&grams, folds, c.name())
+    };
+    let fit = cv(&h.responses, &h.folds)?;
+    let test = h
+        .replicates
+        .as_ref()
+        .map(|rep| cv(&rep.units, &rep.folds))
+        .transpose()?;
+    Ok(HandJointFit { fit, test })
+}
+
+/// Coordinate descent over the named members' settings, as on the cart balance: each
+/// member but the last is searched again with every other member at its setting (on all
+/// units, the setting the cross-validation chooses on all of them), once in order.
+///
+/// # Errors
+/// [`DiscrepancyError::Singular`] when a member cannot be fitted.
+pub fn refine(
+    members: &[HandMember],
+    h: &HandJudgement,
+) -> Result<Vec<HandMember>, DiscrepancyError> {
+    let mut m = members.to_vec();
+    for i in 0..m.len().saturating_sub(1) {
+        if m[i].0.settings() < 2 {
+            continue;
+        }
+        let joint = HandJoint {
+            fixed: m
+                .iter()
+                .enumerate()
+                .filter(|(j, _)| *j != i)
+                .map(|(_, x)| x.clone())
+                .collect(),
+            next: m[i].0.clone(),
+            grip_load_kg: 0.0,
+        };
+        let joint = settle_grip_load(joint, h)?;
+        let grams: Vec<_> = h
+            .responses
+            .par_iter()
+            .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
+            .collect();
+        m[i].1 = cross_validate(&grams, &h.folds, joint.name())?.setting;
+    }
+    Ok(m)
+}
+
+/// Fixed-point passes of [`settle_grip_load`].
+pub const GRIP_LOAD_PASSES: usize = 3;
+
+/// `joint` with [`HandJoint::grip_load_kg`] set to the extra mass it fits, when a grip
+/// and a handle mass are both members: the mass enters the grip's kinematics, which
+/// the balance multiplies by the subject's unknown `D` and `K`, so it is not a linear
+/// coefficient there. From the mass fitted with the grip unloaded, the grip is loaded
+/// with the mass the last fit found, [`GRIP_LOAD_PASSES`] times, on all units at the
+/// setting the cross-validation chooses on all of them (one number, so the folds that
+/// judge the joint see no more of the held-out units than the setting does). Other
+/// joints are returned as they are.
+///
+/// # Errors
+/// [`DiscrepancyError::Singular`] when a fit cannot be made.
+pub fn settle_grip_load(
+    mut joint: HandJoint,
+    h: &HandJudgement,
+) -> Result<HandJoint, DiscrepancyError> {
+    let kinds: Vec<Option<EffectKind>> = joint.members(0).map(|(c, _)| c.kind()).collect();
+    let Some(mass_at) = kinds
+        .iter()
+        .position(|k| *k == Some(EffectKind::HandleMass))
+    else {
+        return Ok(joint);
+    };
+    if !kinds.contains(&Some(EffectKind::GripCompliance)) {
+        return Ok(joint);
+    }
+    for _ in 0..GRIP_LOAD_PASSES {
+        let grams: Vec<_> = h
+            .responses
+            .par_iter()
+            .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
+            .collect();
+        let fit = cross_validate(&grams, &h.folds, joint.name())?;
+        let mass = joint
+            .member_parameters(fit.setting, &fit.beta, h.fb_delay_s)
+            .get(mass_at)
+            .and_then(|(_, p)| {
+                p.iter()
+                    .find(|(k, _)| k == "extra_mass_kg")
+                    .map(|(_, v)| *v)
+            })
+            .filter(|m| m.is_finite())
+            .unwrap_or(0.0);
+        joint.grip_load_kg = mass;
+    }
+    Ok(joint)
+}
