@@ -126,7 +126,8 @@ impl EffectKind {
 
 impl fmt::Display for EffectKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
+        // `pad`, so that a width in the format (the report's columns) is honoured.
+        f.pad(self.name())
     }
 }
 
