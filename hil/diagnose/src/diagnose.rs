@@ -1732,14 +1732,7 @@ fn hand_forward_select(
         let mut round: Vec<(Ranked, HandJoint, CvFit)> = rest
             .into_par_iter()
             .map(|c| {
-                let joint = settle_grip_load(
-                    HandJoint {
-                        fixed: chosen.clone(),
-                        next: c.clone(),
-                        grip_load_kg: 0.0,
-                    },
-                    h,
-                )?;
+                let joint = HandJoint::settled(chosen.clone(), c.clone(), h)?;
                 let fit = fit_on_units(h, &joint)?;
                 let mut members = chosen.clone();
                 members.push((c.clone(), fit.fit.setting));
@@ -1747,14 +1740,7 @@ fn hand_forward_select(
                 let (joint, fit) = if refined.iter().zip(&members).all(|(a, b)| a.1 == b.1) {
                     (joint, fit)
                 } else {
-                    let joint = settle_grip_load(
-                        HandJoint {
-                            fixed: refined[..chosen.len()].to_vec(),
-                            next: c,
-                            grip_load_kg: 0.0,
-                        },
-                        h,
-                    )?;
+                    let joint = HandJoint::settled(refined[..chosen.len()].to_vec(), c, h)?;
                     let fit = fit_on_units(h, &joint)?;
                     (joint, fit)
                 };

@@ -76,6 +76,26 @@ impl HandJoint {
         }
     }
 
+    /// `fixed` plus `next`, with the grip's load settled ([`settle_grip_load`]): how
+    /// forward selection builds each joint it fits.
+    ///
+    /// # Errors
+    /// [`DiscrepancyError::Singular`] when a fit cannot be made.
+    pub fn settled(
+        fixed: Vec<HandMember>,
+        next: Arc<dyn HandCandidate>,
+        h: &HandJudgement,
+    ) -> Result<HandJoint, DiscrepancyError> {
+        settle_grip_load(
+            HandJoint {
+                fixed,
+                next,
+                grip_load_kg: 0.0,
+            },
+            h,
+        )
+    }
+
     /// Every member with its setting, the new one at `s` last.
     fn members(&self, s: usize) -> impl Iterator<Item = (&dyn HandCandidate, usize)> {
         self.fixed
@@ -227,17 +247,13 @@ pub fn refine(
         if m[i].0.settings() < 2 {
             continue;
         }
-        let joint = HandJoint {
-            fixed: m
-                .iter()
-                .enumerate()
-                .filter(|(j, _)| *j != i)
-                .map(|(_, x)| x.clone())
-                .collect(),
-            next: m[i].0.clone(),
-            grip_load_kg: 0.0,
-        };
-        let joint = settle_grip_load(joint, h)?;
+        let fixed = m
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| *j != i)
+            .map(|(_, x)| x.clone())
+            .collect();
+        let joint = HandJoint::settled(fixed, m[i].0.clone(), h)?;
         let grams: Vec<_> = h
             .responses
             .par_iter()
