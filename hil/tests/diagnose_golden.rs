@@ -29,7 +29,7 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-rotation-mass",
-        "9475ddfe47694591ea502f6b11aba6533100e200e8476ef0f2eaae73258f6c68",
+        "5ba17a11bfd5185e4cd80ac2c44e0a97d58968121ba25f4f35d1ecefbdcbc138",
     ),
 ];
 

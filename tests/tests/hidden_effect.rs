@@ -443,6 +443,15 @@ fn rotation_and_a_heavier_handle_are_both_named() {
     check_pair("sensor-rotation+handle-mass", 34);
 }
 
+/// A heavier handle behind a soft grip, both on the hand balance: the grip is named
+/// first, then the mass given it, with the grip's spring carrying the mass's inertial
+/// force too (the load searched for the least error of the joint fit,
+/// `hil/diagnose/src/hand_joint.rs`); both within 20 % on this seed.
+#[test]
+fn a_soft_grip_and_a_heavier_handle_are_both_named() {
+    check_pair("grip-compliance+handle-mass", 37);
+}
+
 /// A heavier handle on a subject with a stretch reflex, both on the hand balance, in a
 /// reflex study's layout: forward selection there names the stronger, then the other
 /// given it, from one joint fit (the mass on the handle's acceleration, the reflex on

@@ -570,14 +570,24 @@ pub fn hand_grams(
     fb_delay_s: f64,
     w: &Whitening,
 ) -> Vec<Gram> {
-    let q = RESPONSE_OFFSET_COLUMNS;
     (0..c.settings())
-        .map(|s| {
-            let mut g = Gram::new(c.columns() + q);
-            weighted_rows(c, r, s, fb_delay_s, w, true, &mut |x, y, n| g.push(x, y, n));
-            g.eliminate_trailing(q)
-        })
+        .map(|s| hand_gram(c, r, s, fb_delay_s, w))
         .collect()
+}
+
+/// The Gram of `c` at setting `s` alone on one response ([`hand_grams`]' `s`-th).
+#[must_use]
+pub fn hand_gram(
+    c: &dyn HandCandidate,
+    r: &HandResponse,
+    s: usize,
+    fb_delay_s: f64,
+    w: &Whitening,
+) -> Gram {
+    let q = RESPONSE_OFFSET_COLUMNS;
+    let mut g = Gram::new(c.columns() + q);
+    weighted_rows(c, r, s, fb_delay_s, w, true, &mut |x, y, n| g.push(x, y, n));
+    g.eliminate_trailing(q)
 }
 
 /// Per row (axes interleaved: x then y of each evaluated sample): target, fit,

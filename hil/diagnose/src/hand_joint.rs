@@ -21,9 +21,10 @@ use rayon::prelude::*;
 
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::error::DiscrepancyError;
+use super::gram::Gram;
 use super::hand::{
-    HandBaseline, HandCandidate, HandJudgement, Kin, base_columns, grip_setting, hand_grams,
-    visit_rows,
+    HandBaseline, HandCandidate, HandJudgement, Kin, base_columns, grip_setting, hand_gram,
+    hand_grams, visit_rows,
 };
 use super::hand_signals::HandResponse;
 use crate::effect::EffectKind;
@@ -264,17 +265,28 @@ pub fn refine(
     Ok(m)
 }
 
-/// Fixed-point passes of [`settle_grip_load`].
-pub const GRIP_LOAD_PASSES: usize = 3;
+/// Grip loads searched, kg: `(first, last, count)`, a uniform grid (20 g a step) from
+/// none to 3 kg, then a parabola through the least and its neighbours. An adapter or
+/// a grip tube weighs well under a kilogram; 3 kg is a second cart's worth, beyond
+/// which a load is not an unlisted part.
+pub const GRIP_LOAD_KG: (f64, f64, usize) = (0.0, 3.0, 151);
 
-/// `joint` with [`HandJoint::grip_load_kg`] set to the extra mass it fits, when a grip
-/// and a handle mass are both members: the mass enters the grip's kinematics, which
-/// the balance multiplies by the subject's unknown `D` and `K`, so it is not a linear
-/// coefficient there. From the mass fitted with the grip unloaded, the grip is loaded
-/// with the mass the last fit found, [`GRIP_LOAD_PASSES`] times, on all units at the
-/// setting the cross-validation chooses on all of them (one number, so the folds that
-/// judge the joint see no more of the held-out units than the setting does). Other
-/// joints are returned as they are.
+/// Rounds of [`settle_grip_load`]: the searched member's setting, then the load at it.
+pub const GRIP_LOAD_ROUNDS: usize = 2;
+
+/// `joint` with [`HandJoint::grip_load_kg`] set to the load that fits it best, when a
+/// grip and a handle mass are both members: the mass enters the grip's kinematics,
+/// which the balance multiplies by the subject's unknown `D` and `K`, so it is not a
+/// linear coefficient there. Each round takes the searched member's setting as the
+/// cross-validation chooses it on all units at the current load, then the load whose
+/// joint fit on all units leaves the least squared error at that setting
+/// ([`least_sse_load`]); [`GRIP_LOAD_ROUNDS`] rounds from no load. The load is one
+/// number, chosen like a setting, so the folds that judge the joint see no more of the
+/// held-out units than the setting does. The load is searched rather than taken from
+/// the mass the last fit found: that fixed point converges slowly where the grip is
+/// soft, and can run to a negative mass (the measurements:
+/// `hil/docs/notes/2026-12-03-hand-balance-settings.md`). Other joints are returned as
+/// they are.
 ///
 /// # Errors
 /// [`DiscrepancyError::Singular`] when a fit cannot be made.
@@ -283,33 +295,66 @@ pub fn settle_grip_load(
     h: &HandJudgement,
 ) -> Result<HandJoint, DiscrepancyError> {
     let kinds: Vec<Option<EffectKind>> = joint.members(0).map(|(c, _)| c.kind()).collect();
-    let Some(mass_at) = kinds
-        .iter()
-        .position(|k| *k == Some(EffectKind::HandleMass))
-    else {
-        return Ok(joint);
-    };
-    if !kinds.contains(&Some(EffectKind::GripCompliance)) {
+    if !kinds.contains(&Some(EffectKind::HandleMass))
+        || !kinds.contains(&Some(EffectKind::GripCompliance))
+    {
         return Ok(joint);
     }
-    for _ in 0..GRIP_LOAD_PASSES {
+    for _ in 0..GRIP_LOAD_ROUNDS {
         let grams: Vec<_> = h
             .responses
             .par_iter()
             .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
             .collect();
-        let fit = cross_validate(&grams, &h.folds, joint.name())?;
-        let mass = joint
-            .member_parameters(fit.setting, &fit.beta, h.fb_delay_s)
-            .get(mass_at)
-            .and_then(|(_, p)| {
-                p.iter()
-                    .find(|(k, _)| k == "extra_mass_kg")
-                    .map(|(_, v)| *v)
-            })
-            .filter(|m| m.is_finite())
-            .unwrap_or(0.0);
-        joint.grip_load_kg = mass;
+        let setting = cross_validate(&grams, &h.folds, joint.name())?.setting;
+        joint.grip_load_kg = least_sse_load(&joint, setting, h)?;
     }
     Ok(joint)
+}
+
+/// The grip load of [`GRIP_LOAD_KG`] whose joint fit at `setting`, on all units, leaves
+/// the least squared error, refined by a parabola through the grid's least point and
+/// its neighbours (the grid point itself at the grid's ends or where the parabola
+/// opens downwards).
+///
+/// # Errors
+/// [`DiscrepancyError::Singular`] when no load can be fitted.
+pub fn least_sse_load(
+    joint: &HandJoint,
+    setting: usize,
+    h: &HandJudgement,
+) -> Result<f64, DiscrepancyError> {
+    let (first, last, n) = GRIP_LOAD_KG;
+    let step = (last - first) / (n - 1) as f64;
+    let sse: Vec<f64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let mut j = joint.clone();
+            j.grip_load_kg = first + step * i as f64;
+            let grams: Vec<_> = h
+                .responses
+                .iter()
+                .map(|r| hand_gram(&j, r, setting, h.fb_delay_s, &h.whitening))
+                .collect();
+            let g = Gram::sum(j.columns(), grams.iter());
+            g.solve().map_or(f64::INFINITY, |b| g.sse(&b))
+        })
+        .collect();
+    let best = (0..n)
+        .filter(|i| sse[*i].is_finite())
+        .min_by(|a, b| sse[*a].total_cmp(&sse[*b]))
+        .ok_or_else(|| DiscrepancyError::Singular {
+            what: format!("{} with a loaded grip", joint.name()),
+        })?;
+    let at = first + step * best as f64;
+    if best == 0 || best == n - 1 {
+        return Ok(at);
+    }
+    let (a, b, c) = (sse[best - 1], sse[best], sse[best + 1]);
+    let curvature = a - 2.0 * b + c;
+    Ok(if curvature > 0.0 && curvature.is_finite() {
+        at + 0.5 * step * (a - c) / curvature
+    } else {
+        at
+    })
 }
