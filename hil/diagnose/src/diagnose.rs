@@ -1262,14 +1262,14 @@ pub(crate) fn with_fast_velocities(
             }
             den += s[axis].1;
         }
-        // The best lag explains the most of the encoder, `num² / den`: the largest `|num|`.
-        // Without a fast velocity (`den` 0) there is none.
+        // The best lag explains the most of the encoder with a factor that is not
+        // negative (a factor below zero is no motion the forces made): the largest
+        // `num`, `num² / den` explained. Not the largest `|num|`: at a ~200 Hz limit
+        // cycle the lag half a period away correlates about as strongly with the
+        // opposite sign, and a factor clamped to 0 there dropped the axis's fast part
+        // altogether. Without a fast velocity (`den` 0) there is none.
         let best = (den > 0.0)
-            .then(|| {
-                nums.iter()
-                    .enumerate()
-                    .max_by(|a, b| (a.1 * a.1).total_cmp(&(b.1 * b.1)))
-            })
+            .then(|| nums.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)))
             .flatten();
         let (factor, lag) = best.map_or((0.0, 0), |(l, num)| {
             (
