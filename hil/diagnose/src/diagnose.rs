@@ -1262,21 +1262,7 @@ pub(crate) fn with_fast_velocities(
             }
             den += s[axis].1;
         }
-        // The best lag explains the most of the encoder with a factor that is not
-        // negative (a factor below zero is no motion the forces made): the largest
-        // `num`, `num² / den` explained. Not the largest `|num|`: at a ~200 Hz limit
-        // cycle the lag half a period away correlates about as strongly with the
-        // opposite sign, and a factor clamped to 0 there dropped the axis's fast part
-        // altogether. Without a fast velocity (`den` 0) there is none.
-        let best = (den > 0.0)
-            .then(|| nums.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)))
-            .flatten();
-        let (factor, lag) = best.map_or((0.0, 0), |(l, num)| {
-            (
-                (num / den).clamp(0.0, FAST_MATCH_MAX),
-                l as isize - max_lag as isize,
-            )
-        });
+        let (factor, lag) = best_fast_match(&nums, den, max_lag);
         for s in &mut signals {
             s.match_fast(axis, factor, lag);
         }
@@ -1286,6 +1272,31 @@ pub(crate) fn with_fast_velocities(
         s.drop_recorded();
     }
     Ok(signals)
+}
+
+/// The factor and lag (samples) of the forces' fast velocity that explain the most of
+/// the encoder's fast motion, from [`BalanceSignals::fast_match`]'s sums over the
+/// session (`nums[l + max_lag]` the cross sums at lag `l`, `den` the fast part's own):
+/// the lag of the largest positive cross sum, `num² / den` explained, with the factor
+/// `num / den` capped at [`FAST_MATCH_MAX`]. Not the largest `|num|`: at a ~200 Hz
+/// limit cycle the lag half a period away correlates about as strongly with the
+/// opposite sign, and a negative factor is no motion the forces made. `(0, 0)` without
+/// a fast velocity (`den` 0) or a positive match.
+fn best_fast_match(nums: &[f64], den: f64, max_lag: usize) -> (f64, isize) {
+    let best = (den > 0.0)
+        .then(|| {
+            nums.iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0.0)
+                .max_by(|a, b| a.1.total_cmp(b.1))
+        })
+        .flatten();
+    best.map_or((0.0, 0), |(l, num)| {
+        (
+            (num / den).min(FAST_MATCH_MAX),
+            l as isize - max_lag as isize,
+        )
+    })
 }
 
 /// Largest lag searched between the forces' fast velocity and the encoder's, s: a
@@ -2018,4 +2029,50 @@ fn evidence(
         ));
     }
     ev
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 200 Hz limit cycle sampled at 1 kHz, the encoder seeing half of the forces'
+    /// fast motion 0.4 ms later: the cross sums peak at lag 0 with `½ cos(2π·0.08)` =
+    /// 0.438 of the fast part's own, and at lag +2 (half a period away) at −0.496, larger
+    /// in magnitude. The match is the positive peak with its factor (to 1 %, the sums'
+    /// edge effects over 200 periods), not the opposite-signed one, whose factor would
+    /// be clamped to nothing.
+    #[test]
+    fn the_fast_match_is_the_positive_peak_not_the_largest_magnitude() {
+        let (rate, n, max_lag) = (1000.0, 1000usize, 3usize);
+        let w = std::f64::consts::TAU * 200.0;
+        let e: Vec<f64> = (0..n).map(|i| (w * i as f64 / rate).sin()).collect();
+        let p: Vec<f64> = (0..n)
+            .map(|i| 0.5 * (w * (i as f64 / rate - 0.4e-3)).sin())
+            .collect();
+        let den: f64 = e.iter().map(|x| x * x).sum();
+        let nums: Vec<f64> = (-(max_lag as isize)..=max_lag as isize)
+            .map(|l| {
+                (0..n as isize)
+                    .filter(|i| (0..n as isize).contains(&(i + l)))
+                    .map(|i| p[i as usize] * e[(i + l) as usize])
+                    .sum()
+            })
+            .collect();
+        let largest = nums
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.abs().total_cmp(&b.1.abs()))
+            .map(|(i, _)| i as isize - max_lag as isize);
+        assert_eq!(largest, Some(2), "the sums: {nums:?}");
+        let (factor, lag) = best_fast_match(&nums, den, max_lag);
+        let want = 0.5 * (std::f64::consts::TAU * 0.08).cos();
+        assert_eq!(lag, 0, "the sums: {nums:?}");
+        assert!(
+            (factor - want).abs() < 0.01 * want,
+            "factor {factor} for {want}"
+        );
+        // No positive match, no fast part.
+        let negated: Vec<f64> = nums.iter().map(|x| -x.abs()).collect();
+        assert_eq!(best_fast_match(&negated, den, max_lag), (0.0, 0));
+    }
 }
