@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "a1bef8f370f24bac458eb46d0d069f6ee690cdf63f368d6915eed601eb561f49",
+        "61371e1f669e0a949d6e7a2ff05f234cd3a84e75a230dc50461ec2f4f9d1247b",
     ),
     (
         "example-friction",
-        "ed19d1216cb1a5249893c9eeb2988fd769eb45b9d664888abc79e160f46e3d9b",
+        "72119bbd106f42a50fedf9eb068cbad35fd7b62026840a07a2be5a22915164eb",
     ),
     (
         "example-nuisance",
-        "b063608b18d90b54b38b1c50f1d893f49f6aae9da19bd4051aa659eeec86378e",
+        "1d3f3de195fd15d5188da91ba2907a54ccfa32da225a022e5b01ff08c9067861",
     ),
     (
         "example-rotation-mass",
-        "5ba17a11bfd5185e4cd80ac2c44e0a97d58968121ba25f4f35d1ecefbdcbc138",
+        "37b8c1cbe07cd3812ab83bb99135b3959f889f435f3a6ec726ab8cf1002f3929",
     ),
 ];
 

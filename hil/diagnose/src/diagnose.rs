@@ -58,7 +58,7 @@ use super::gram::Gram;
 use super::hand::{
     HandCandidate, HandJudgement, ReplicateTest, baseline_parameters, hand_candidate, judge_hand,
 };
-use super::hand_joint::{HandJoint, HandMember, fit_on_units, settle_grip_load};
+use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
 use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
@@ -1481,6 +1481,9 @@ struct HandRanking {
     corrected: Vec<String>,
     /// The causes named by forward selection, in order, with joint parameters.
     named: Vec<Cause>,
+    /// The row that leads them: the first cause's against the baseline (for a masked
+    /// pair, the pair's).
+    lead: Option<Ranked>,
 }
 
 /// The hand balance: judged again on the reading turned back by a rotation `named` on
@@ -1528,6 +1531,7 @@ fn rank_hand(
     }
     let mut ranked: Vec<Ranked> = Vec::new();
     let mut hand_named = Vec::new();
+    let mut hand_lead = None;
     let (mut df_out, mut t_out) = (None, None);
     let judgement = match hand {
         Ok(h) => {
@@ -1570,9 +1574,10 @@ fn rank_hand(
                 min_gain: opts.min_gain,
                 scale,
             };
-            let (causes, rounds) = hand_forward_select(&judge, &ranked)?;
-            hand_named = causes;
-            d.conditional.extend(rounds);
+            let selected = hand_forward_select(&judge, &ranked)?;
+            hand_named = selected.causes;
+            hand_lead = selected.lead;
+            d.conditional.extend(selected.rounds);
             Some(h)
         }
         Err(why) => {
@@ -1592,6 +1597,7 @@ fn rank_hand(
         t_critical: t_out,
         corrected,
         named: hand_named,
+        lead: hand_lead,
     })
 }
 
@@ -1700,32 +1706,81 @@ impl HandJudge<'_> {
     }
 }
 
+/// What forward selection on the hand balance found.
+struct HandSelection {
+    /// The causes in the order named, each with its parameters from the last joint fit.
+    causes: Vec<Cause>,
+    /// Every later round's rows (for a masked pair, each member's given the other too).
+    rounds: Vec<Ranked>,
+    /// The row that leads the causes against the baseline.
+    lead: Option<Ranked>,
+}
+
+/// A candidate fitted jointly with the named effects `chosen` and judged against them
+/// alone (`base`, their joint fit): the named ones' settings refined given it.
+fn hand_joint_row(
+    judge: &HandJudge<'_>,
+    chosen: &[HandMember],
+    c: Arc<dyn HandCandidate>,
+    base: &HandJointFit,
+) -> Result<(Ranked, HandJoint, HandJointFit), DiscrepancyError> {
+    let h = judge.h;
+    let given: Vec<String> = chosen.iter().map(|(c, _)| c.name().to_string()).collect();
+    let joint = HandJoint::settled(chosen.to_vec(), c.clone(), h)?;
+    let fit = fit_on_units(h, &joint)?;
+    let mut members = chosen.to_vec();
+    members.push((c.clone(), fit.fit.setting));
+    let refined = super::hand_joint::refine(&members, h)?;
+    let (joint, fit) = if refined.iter().zip(&members).all(|(a, b)| a.1 == b.1) {
+        (joint, fit)
+    } else {
+        let joint = HandJoint::settled(refined[..chosen.len()].to_vec(), c, h)?;
+        let fit = fit_on_units(h, &joint)?;
+        (joint, fit)
+    };
+    let test = fit.test.as_ref().zip(base.test.as_ref());
+    let row = judge.row(&joint, &fit.fit, &base.fit, test, &given);
+    Ok((row, joint, fit))
+}
+
 /// Forward selection on the hand balance, as on the cart balance: the best passing
 /// candidate of `ranked` is named; every other one is then fitted jointly with the named
 /// ones ([`HandJoint`]; the named ones' settings refined given it) and judged against
 /// the named ones alone by the same rules; the best that passes is named, and so on
-/// until none passes. Returns the causes in the order named, each with its parameters
-/// from the last joint fit, and every later round's rows.
+/// until none passes. When no candidate passes alone, pairs that mask each other are
+/// tried first ([`hand_masked_pair`]).
 fn hand_forward_select(
     judge: &HandJudge<'_>,
     ranked: &[Ranked],
-) -> Result<(Vec<Cause>, Vec<Ranked>), DiscrepancyError> {
+) -> Result<HandSelection, DiscrepancyError> {
     let h = judge.h;
     let named = |kind: Option<EffectKind>| {
         let fit = h.fits.iter().find(|f| f.candidate.kind() == kind)?;
         let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(kind?)?);
         Some((c, fit.fit.setting))
     };
-    let Some((first, member)) = ranked
+    let single = ranked
         .iter()
         .find(|r| r.significant)
-        .and_then(|r| named(r.kind).map(|m| (r, m)))
-    else {
-        return Ok((Vec::new(), Vec::new()));
+        .and_then(|r| named(r.kind).map(|m| (r, m)));
+    let (mut causes, mut chosen, mut rounds, lead) = match single {
+        Some((first, member)) => (
+            vec![Cause::of(first)?],
+            vec![member],
+            Vec::new(),
+            first.clone(),
+        ),
+        None => match hand_masked_pair(judge)? {
+            Some(pair) => (pair.causes, pair.chosen, pair.rows, pair.lead),
+            None => {
+                return Ok(HandSelection {
+                    causes: Vec::new(),
+                    rounds: Vec::new(),
+                    lead: None,
+                });
+            }
+        },
     };
-    let mut causes = vec![Cause::of(first)?];
-    let mut chosen: Vec<HandMember> = vec![member];
-    let mut rounds = Vec::new();
     loop {
         let rest: Vec<Arc<dyn HandCandidate>> = h
             .fits
@@ -1738,26 +1793,12 @@ fn hand_forward_select(
         if rest.is_empty() {
             break;
         }
-        let given: Vec<String> = chosen.iter().map(|(c, _)| c.name().to_string()).collect();
         let base = fit_on_units(h, &settle_grip_load(HandJoint::given(chosen.clone()), h)?)?;
         let mut round: Vec<(Ranked, HandJoint, CvFit)> = rest
             .into_par_iter()
             .map(|c| {
-                let joint = HandJoint::settled(chosen.clone(), c.clone(), h)?;
-                let fit = fit_on_units(h, &joint)?;
-                let mut members = chosen.clone();
-                members.push((c.clone(), fit.fit.setting));
-                let refined = super::hand_joint::refine(&members, h)?;
-                let (joint, fit) = if refined.iter().zip(&members).all(|(a, b)| a.1 == b.1) {
-                    (joint, fit)
-                } else {
-                    let joint = HandJoint::settled(refined[..chosen.len()].to_vec(), c, h)?;
-                    let fit = fit_on_units(h, &joint)?;
-                    (joint, fit)
-                };
-                let test = fit.test.as_ref().zip(base.test.as_ref());
-                let row = judge.row(&joint, &fit.fit, &base.fit, test, &given);
-                Ok((row, joint, fit.fit))
+                hand_joint_row(judge, &chosen, c, &base)
+                    .map(|(row, joint, fit)| (row, joint, fit.fit))
             })
             .collect::<Result<Vec<_>, DiscrepancyError>>()?;
         round.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
@@ -1785,7 +1826,89 @@ fn hand_forward_select(
         chosen = joint.fixed.clone();
         chosen.push((joint.next.clone(), fit.setting));
     }
-    Ok((causes, rounds))
+    Ok(HandSelection {
+        causes,
+        rounds,
+        lead: Some(lead),
+    })
+}
+
+/// Two effects named together ([`hand_masked_pair`]).
+struct MaskedPair {
+    /// The two causes, the one that gains more given the other first, each with its
+    /// parameters from the joint fit in which it was searched.
+    causes: Vec<Cause>,
+    /// Both at their settings, for the next round.
+    chosen: Vec<HandMember>,
+    /// Each member's row given the other.
+    rows: Vec<Ranked>,
+    /// The pair's row against the baseline, under the first cause's name.
+    lead: Ranked,
+}
+
+/// Human-side effects whose responses mask each other, named together. On brief pulses
+/// a soft grip lowers the response's inertia and a heavier handle raises it: alone,
+/// each fits worse than the baseline, so forward selection from single candidates
+/// names neither. When no candidate passes alone, every pair is fitted jointly (each
+/// member searched given the other, [`hand_joint_row`]); a pair is named when each
+/// member passes given the other alone and the pair passes against the baseline, all by
+/// the same rules (the t-test on the repetitions, the 10 % floor, the physical checks).
+/// The three tests must all pass, so the pair's false-alarm rate is at most the least
+/// of theirs; it is measured on sessions hiding nothing (README). Of several passing
+/// pairs the one that gains most over the baseline is named.
+fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, DiscrepancyError> {
+    let h = judge.h;
+    let members: Vec<HandMember> = h
+        .fits
+        .iter()
+        .filter_map(|f| {
+            let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(f.candidate.kind()?)?);
+            Some((c, f.fit.setting))
+        })
+        .collect();
+    let none = fit_on_units(h, &HandJoint::given(Vec::new()))?;
+    let pairs: Vec<(usize, usize)> = (0..members.len())
+        .flat_map(|i| (i + 1..members.len()).map(move |j| (i, j)))
+        .collect();
+    let tried = pairs
+        .into_par_iter()
+        .map(|(i, j)| -> Result<Option<MaskedPair>, DiscrepancyError> {
+            let (a, b) = (&members[i], &members[j]);
+            let base_a = fit_on_units(h, &HandJoint::given(vec![a.clone()]))?;
+            let (row_b, joint_ab, fit_ab) =
+                hand_joint_row(judge, std::slice::from_ref(a), b.0.clone(), &base_a)?;
+            let b_at = (b.0.clone(), fit_ab.fit.setting);
+            let base_b = fit_on_units(h, &HandJoint::given(vec![b_at.clone()]))?;
+            let (row_a, joint_ba, fit_ba) = hand_joint_row(judge, &[b_at], a.0.clone(), &base_b)?;
+            if !(row_a.significant && row_b.significant) {
+                return Ok(None);
+            }
+            // The pair against the baseline, under the name of the member that gains
+            // more given the other.
+            let (first, second, joint, fit) = if row_a.gain > row_b.gain {
+                (row_a, row_b, joint_ba, fit_ba)
+            } else {
+                (row_b, row_a, joint_ab, fit_ab)
+            };
+            let test = fit.test.as_ref().zip(none.test.as_ref());
+            let lead = judge.row(&joint, &fit.fit, &none.fit, test, &[]);
+            if !lead.significant {
+                return Ok(None);
+            }
+            let mut chosen = joint.fixed.clone();
+            chosen.push((joint.next.clone(), fit.fit.setting));
+            Ok(Some(MaskedPair {
+                causes: vec![Cause::of(&first)?, Cause::of(&second)?],
+                chosen,
+                rows: vec![first, second],
+                lead,
+            }))
+        })
+        .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+    Ok(tried
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| a.lead.gain.total_cmp(&b.lead.gain)))
 }
 
 /// The decision between the balances: each balance's causes in the order of selection,
@@ -1818,7 +1941,7 @@ fn decide(
             .map(|(r, _)| r)
             .find(|r| r.kind == Some(c.name))
     });
-    let hand_first = hand_ranked.iter().find(|r| r.significant);
+    let hand_first = hand.lead.as_ref();
     let hand_named: Vec<Cause> = hand.named.clone();
     let plant_leads = match (plant_first, hand_first) {
         (Some(p), Some(h)) => p.gain >= h.gain,
@@ -1868,7 +1991,9 @@ fn decide(
                  a fitted law that explains at least {:.0} % of its binned partial residual. On the cart \
                  balance effects are selected forward: the best passing candidate is named, then each \
                  other one is fitted jointly with the named ones and judged against them alone by the \
-                 same rules, until none passes; the hand balance likewise. \
+                 same rules, until none passes; the hand balance likewise, and where none of its \
+                 candidates passes alone, a pair is named together when each passes given the other \
+                 and the pair passes against the baseline. \
                  Laws outside the catalog (the library of hil/diagnose/src/unexplained.rs) compete on the \
                  cart balance: a cause they explain better and to which it adds nothing given them is \
                  rejected, and what they still explain given the causes is reported as unexplained",
