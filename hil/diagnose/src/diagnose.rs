@@ -14,7 +14,11 @@
 //! too, and so on ([`Diagnosis::conditional`]). The hand balance selects its effects
 //! forward the same way ([`super::hand_joint::HandJoint`]: a handle mass on the
 //! handle's acceleration, a reflex on the hand's velocity, a grip's hand behind its
-//! spring). The parameters of every cause come from its balance's last joint fit.
+//! spring). Where no human-side candidate passes alone, pairs are fitted jointly and
+//! a pair is named together when each member passes given the other and the pair
+//! passes against the baseline (`hand_masked_pair`: on brief pulses a soft grip and a
+//! heavier handle change the response's inertia in opposite directions, so alone
+//! neither fits). The parameters of every cause come from its balance's last joint fit.
 //! [`Diagnosis::causes`] lists them, the balance whose first cause gains more first;
 //! `cause` is the first, or `none`. Besides the statistics, a candidate must be
 //! physical and material, inside its search range and agree with its own binned
