@@ -1857,8 +1857,9 @@ struct MaskedPair {
 /// member searched given the other, [`hand_joint_row`]); a pair is named when each
 /// member passes given the other alone and the pair passes against the baseline, all by
 /// the same rules (the t-test on the repetitions, the 10 % floor, the physical checks).
-/// The three tests must all pass, so the pair's false-alarm rate is at most the least
-/// of theirs; it is measured on sessions hiding nothing (README). Of several passing
+/// The three tests must all pass, so a pair's false-alarm rate is at most the least of
+/// theirs (over the three pairs, at most three times it); it is measured on sessions
+/// hiding nothing (README). Of several passing
 /// pairs the one that gains most over the baseline is named.
 fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, DiscrepancyError> {
     let h = judge.h;
