@@ -1348,6 +1348,86 @@ mod tests {
         assert!(moved > 1e-7, "the load moved the hand by at most {moved} m");
     }
 
+    /// A response made exactly of a grip (3155 N/m, τ 5 ms: a point of the grid) and a
+    /// 0.43 kg handle mass on the handle's side of it: the hand moves by two
+    /// incommensurate motions per axis, the arm's law gives the force on it, the handle
+    /// trails it through the spring (the same filter [`Kin::grip`] integrates), and the
+    /// sensor reads that force less the mass's inertial force. The load search finds the
+    /// mass to 2 g (a tenth of its 20 g grid; the squared error is not quite a parabola
+    /// in the load), the joint fit there leaves nothing of the force (1e-12), and no load
+    /// leaves a residual.
+    #[test]
+    fn the_grip_load_search_finds_the_mass_behind_a_grip() {
+        use crate::hand_joint::{HandJoint, least_sse_load};
+        use std::sync::Arc;
+        let hand = moving_response();
+        let (n, rate, m_arm) = (hand.df[0].len(), hand.rate_hz, hand.m_arm[0]);
+        let d = Matrix2::new(12.0, -3.0, 5.0, 9.0);
+        let k = Matrix2::new(420.0, 60.0, -140.0, 310.0);
+        let (setting, mass) = (16 * GRIP_TIME_S.len() + 2, 0.43);
+        let (k_grip, tau) = grip_setting(setting);
+        // The hand's jerk, by central differences of its acceleration, for the force's rate.
+        let jerk = |a: &[f64], i: usize| {
+            let (lo, hi) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            (a[hi] - a[lo]) * rate / (hi - lo) as f64
+        };
+        // The force on the hand by the arm's law (no delayed feedback) and its rate.
+        let mut spring = response(vec![0.0; n], rate);
+        for j in 0..n {
+            let at = |s: &[Vec<f64>; 2]| Vector2::new(s[0][j], s[1][j]);
+            let f = -(m_arm * at(&hand.da) + d * at(&hand.dv) + k * at(&hand.dx));
+            let jk = Vector2::new(jerk(&hand.da[0], j), jerk(&hand.da[1], j));
+            let fd = -(m_arm * jk + d * at(&hand.da) + k * at(&hand.dv));
+            for axis in 0..2 {
+                spring.df[axis][j] = f[axis];
+                spring.dfd[axis][j] = fd[axis];
+            }
+        }
+        // The spring's stretch under that force, and the handle behind it.
+        let stretch = Kin::grip(&spring, k_grip, tau);
+        let mut r = hand.clone();
+        for axis in 0..2 {
+            for j in 0..n {
+                r.dx[axis][j] = hand.dx[axis][j] - stretch.x[axis][j];
+                r.dv[axis][j] = hand.dv[axis][j] - stretch.v[axis][j];
+                r.da[axis][j] = hand.da[axis][j] - stretch.a[axis][j];
+            }
+            for j in 0..n {
+                r.df[axis][j] = spring.df[axis][j] - mass * r.da[axis][j];
+                r.dfd[axis][j] = spring.dfd[axis][j] - mass * jerk(&r.da[axis], j);
+            }
+        }
+        let w = Whitening {
+            noise_time_s: 0.03,
+            axes: Matrix2::identity(),
+            source: WeightSource::Residual,
+        };
+        let fb = 0.06;
+        let mut joint = HandJoint {
+            fixed: vec![(Arc::new(GripCompliance), setting)],
+            next: Arc::new(HandleMass),
+            grip_load_kg: 0.0,
+        };
+        let found = least_sse_load(&joint, 0, std::slice::from_ref(&r), fb, &w).unwrap();
+        assert!((found - mass).abs() < 2e-3, "load {found} kg for {mass}");
+        let rel_sse = |joint: &HandJoint| {
+            let g = hand_gram(joint, &r, 0, fb, &w);
+            let beta = g.solve().unwrap_or_default();
+            (g.sse(&beta) / g.norm_sq, beta)
+        };
+        joint.grip_load_kg = mass;
+        let (at_mass, beta) = rel_sse(&joint);
+        assert!(at_mass < 1e-12, "the loaded joint leaves {at_mass}");
+        let fitted = joint.member_parameters(0, &beta, fb)[1].1[0].1;
+        assert!((fitted - mass).abs() < 1e-6, "mass column {fitted}");
+        joint.grip_load_kg = 0.0;
+        let (unloaded, _) = rel_sse(&joint);
+        assert!(
+            unloaded > 1e-6,
+            "without the load the joint leaves only {unloaded}"
+        );
+    }
+
     /// A residual that is first-order autoregressive in time with the weighting's own
     /// `φ` and innovations `L ξ` correlated between the axes: the fitted weighting's `W`
     /// makes the innovations' covariance a multiple of the identity. 20 000 samples, so

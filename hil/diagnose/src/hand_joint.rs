@@ -23,8 +23,8 @@ use super::crossval::{CvFit, Folds, cross_validate};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::hand::{
-    HandBaseline, HandCandidate, HandJudgement, Kin, base_columns, grip_setting, hand_gram,
-    hand_grams, visit_rows,
+    HandBaseline, HandCandidate, HandJudgement, Kin, Whitening, base_columns, grip_setting,
+    hand_gram, hand_grams, visit_rows,
 };
 use super::hand_signals::HandResponse;
 use crate::effect::EffectKind;
@@ -307,22 +307,25 @@ pub fn settle_grip_load(
             .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
             .collect();
         let setting = cross_validate(&grams, &h.folds, joint.name())?.setting;
-        joint.grip_load_kg = least_sse_load(&joint, setting, h)?;
+        joint.grip_load_kg =
+            least_sse_load(&joint, setting, &h.responses, h.fb_delay_s, &h.whitening)?;
     }
     Ok(joint)
 }
 
-/// The grip load of [`GRIP_LOAD_KG`] whose joint fit at `setting`, on all units, leaves
-/// the least squared error, refined by a parabola through the grid's least point and
-/// its neighbours (the grid point itself at the grid's ends or where the parabola
-/// opens downwards).
+/// The grip load of [`GRIP_LOAD_KG`] whose joint fit at `setting` on all `responses`
+/// (weighted by `w`, with the feedback delay `fb_delay_s`) leaves the least squared
+/// error, refined by a parabola through the grid's least point and its neighbours (the
+/// grid point itself at the grid's ends or where the parabola opens downwards).
 ///
 /// # Errors
 /// [`DiscrepancyError::Singular`] when no load can be fitted.
 pub fn least_sse_load(
     joint: &HandJoint,
     setting: usize,
-    h: &HandJudgement,
+    responses: &[HandResponse],
+    fb_delay_s: f64,
+    w: &Whitening,
 ) -> Result<f64, DiscrepancyError> {
     let (first, last, n) = GRIP_LOAD_KG;
     let step = (last - first) / (n - 1) as f64;
@@ -331,10 +334,9 @@ pub fn least_sse_load(
         .map(|i| {
             let mut j = joint.clone();
             j.grip_load_kg = first + step * i as f64;
-            let grams: Vec<_> = h
-                .responses
+            let grams: Vec<_> = responses
                 .iter()
-                .map(|r| hand_gram(&j, r, setting, h.fb_delay_s, &h.whitening))
+                .map(|r| hand_gram(&j, r, setting, fb_delay_s, w))
                 .collect();
             let g = Gram::sum(j.columns(), grams.iter());
             g.solve().map_or(f64::INFINITY, |b| g.sse(&b))
