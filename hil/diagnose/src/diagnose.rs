@@ -1758,15 +1758,10 @@ fn hand_forward_select(
     ranked: &[Ranked],
 ) -> Result<HandSelection, DiscrepancyError> {
     let h = judge.h;
-    let named = |kind: Option<EffectKind>| {
-        let fit = h.fits.iter().find(|f| f.candidate.kind() == kind)?;
-        let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(kind?)?);
-        Some((c, fit.fit.setting))
-    };
     let single = ranked
         .iter()
         .find(|r| r.significant)
-        .and_then(|r| named(r.kind).map(|m| (r, m)));
+        .and_then(|r| hand_member(h, r.kind?).map(|m| (r, m)));
     let (mut causes, mut chosen, mut rounds, lead) = match single {
         Some((first, member)) => (
             vec![Cause::of(first)?],
@@ -1837,6 +1832,14 @@ fn hand_forward_select(
     })
 }
 
+/// The human-side candidate `kind` at the setting its first-round fit chose on all
+/// units, as forward selection names it.
+fn hand_member(h: &HandJudgement, kind: EffectKind) -> Option<HandMember> {
+    let fit = h.fits.iter().find(|f| f.candidate.kind() == Some(kind))?;
+    let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(kind)?);
+    Some((c, fit.fit.setting))
+}
+
 /// Two effects named together ([`hand_masked_pair`]).
 struct MaskedPair {
     /// The two causes, the one that gains more given the other first, each with its
@@ -1866,12 +1869,8 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
     let members: Vec<HandMember> = h
         .fits
         .iter()
-        .filter_map(|f| {
-            let c: Arc<dyn HandCandidate> = Arc::from(hand_candidate(f.candidate.kind()?)?);
-            Some((c, f.fit.setting))
-        })
+        .filter_map(|f| hand_member(h, f.candidate.kind()?))
         .collect();
-    let none = fit_on_units(h, &HandJoint::given(Vec::new()))?;
     let pairs: Vec<(usize, usize)> = (0..members.len())
         .flat_map(|i| (i + 1..members.len()).map(move |j| (i, j)))
         .collect();
@@ -1895,8 +1894,13 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
             } else {
                 (row_b, row_a, joint_ab, fit_ab)
             };
-            let test = fit.test.as_ref().zip(none.test.as_ref());
-            let lead = judge.row(&joint, &fit.fit, &none.fit, test, &[]);
+            // The baseline's fits are the judgement's own (its rows are the joint's
+            // without members).
+            let test = fit
+                .test
+                .as_ref()
+                .zip(h.replicates.as_ref().map(|rep| &rep.baseline));
+            let lead = judge.row(&joint, &fit.fit, &h.baseline, test, &[]);
             if !lead.significant {
                 return Ok(None);
             }
