@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "61371e1f669e0a949d6e7a2ff05f234cd3a84e75a230dc50461ec2f4f9d1247b",
+        "e858db67a68ab324488da677b2bb2f1d8d01618e00213fdd6e3fb4d88f698df6",
     ),
     (
         "example-friction",
-        "72119bbd106f42a50fedf9eb068cbad35fd7b62026840a07a2be5a22915164eb",
+        "aebf31a270086732d4e736a24eb5a098b7e481128af3afe705ca0ff0b7ad9365",
     ),
     (
         "example-nuisance",
-        "1d3f3de195fd15d5188da91ba2907a54ccfa32da225a022e5b01ff08c9067861",
+        "21072677d177ce18d8839fa710a1347197fbc167e9b245be2627d4962d1480c5",
     ),
     (
         "example-rotation-mass",
-        "37b8c1cbe07cd3812ab83bb99135b3959f889f435f3a6ec726ab8cf1002f3929",
+        "0514a938edc303c8a0a49f2059a6071039892d8504e1a3f8362c9b147d303f62",
     ),
 ];
 

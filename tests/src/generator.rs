@@ -51,7 +51,7 @@ const TICK_S: f64 = rigtwin_world::TICK_S;
 /// Effects outside the diagnosis's catalog a generated session may hide ([`draw`]): a
 /// diagnosis must not name a catalog effect for them but report the residual as
 /// unexplained.
-pub const OUT_OF_CATALOG: [&str; 2] = ["cable-spring", "sensor-lowpass"];
+pub const OUT_OF_CATALOG: [&str; 3] = ["cable-spring", "sensor-lowpass", "late-feedback"];
 
 /// Pairs of effects a generated session may hide together ([`draw`] with `a+b`): two
 /// plant-side effects on one rig (friction and cogging, friction and a latency), one
@@ -86,6 +86,9 @@ pub struct Hidden {
     pub effects: PlantEffects,
     /// The subject's stretch reflex (`stretch-reflex`), put into the protocol's arm.
     pub stretch_reflex: Option<StretchReflex>,
+    /// The subject's feedback delay, ms (`late-feedback`), put into the protocol's arm
+    /// instead of its 60 ms.
+    pub feedback_delay_ms: Option<f64>,
 }
 
 /// Draws the parameters of `effect` from realistic ranges; `None` for an unknown name.
@@ -117,6 +120,10 @@ pub struct Hidden {
 ///   10 cm reach: an energy chain's bending force).
 /// - `sensor-lowpass`: the force sensor's reading through a first-order low-pass at
 ///   10–30 Hz (an amplifier's anti-alias or a DSP filter set low: 5–16 ms of lag).
+/// - `late-feedback`: a subject whose delayed feedback (the arm's PD on the muscles'
+///   stretch) acts after 110–160 ms in whole milliseconds instead of the model's
+///   60 ms: a slow responder, whose corrections are long-latency or voluntary ones
+///   (those begin 100–150 ms after a perturbation).
 ///
 /// `a+b` draws each named effect in turn from the same generator and hides them
 /// together; `None` when a name is unknown or repeated, or one of them is `none`.
@@ -132,6 +139,7 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
         parameters: BTreeMap::new(),
         effects: PlantEffects::default(),
         stretch_reflex: None,
+        feedback_delay_ms: None,
     };
     for (i, name) in names.iter().enumerate() {
         if *name == "none" || names[..i].contains(name) {
@@ -148,6 +156,7 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
         w.grip_compliance = w.grip_compliance.or(e.grip_compliance);
         w.cable_spring = w.cable_spring.or(e.cable_spring);
         all.stretch_reflex = all.stretch_reflex.or(h.stretch_reflex);
+        all.feedback_delay_ms = all.feedback_delay_ms.or(h.feedback_delay_ms);
         all.parameters.extend(h.parameters.clone());
         all.each.extend(h.each);
     }
@@ -157,6 +166,7 @@ pub fn draw(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
 fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
     let mut effects = PlantEffects::default();
     let mut stretch_reflex = None;
+    let mut feedback_delay_ms = None;
     let mut p = BTreeMap::new();
     match (effect, EffectKind::from_name(effect)) {
         ("none", _) => {}
@@ -248,6 +258,11 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
             p.insert("lowpass_hz".into(), s.lowpass_hz);
             effects.sensor = Some(s);
         }
+        ("late-feedback", None) => {
+            let ms: f64 = rng.random_range(110.0_f64..160.0).round();
+            p.insert("feedback_delay_ms".into(), ms);
+            feedback_delay_ms = Some(ms);
+        }
         _ => return None,
     }
     Some(Hidden {
@@ -260,6 +275,7 @@ fn draw_one(effect: &str, rng: &mut ChaCha8Rng) -> Option<Hidden> {
         parameters: p,
         effects,
         stretch_reflex,
+        feedback_delay_ms,
     })
 }
 
@@ -418,6 +434,9 @@ pub fn generate_design(
     protocol.recording.truth_columns = false;
     protocol.plant.effects = hidden.effects.clone();
     protocol.subjects.arm.stretch_reflex = hidden.stretch_reflex;
+    if let Some(ms) = hidden.feedback_delay_ms {
+        protocol.subjects.arm.feedback.delay_ms = ms;
+    }
     protocol.subjects.first_is_nominal = false;
     if let Some(p) = &design.pulse {
         protocol.controller.force_pulse = p.clone();
@@ -434,12 +453,22 @@ pub fn generate_design(
         max_trials: Some(trials),
     };
     let r = rehearse::rehearse(&protocol, &options, &|_| {}, &AtomicBool::new(false))?;
-    let dir = r
-        .subjects
-        .first()
-        .map(|s| s.dir.clone())
-        .ok_or("the rehearsal wrote no session")?;
-    Ok(Generated { dir, hidden })
+    let subject = r.subjects.first().ok_or("the rehearsal wrote no session")?;
+    let mut hidden = hidden;
+    // A late feedback's gain is the subject's own (the protocol draws it): recorded with
+    // the delay as what a diagnosis should recover.
+    if hidden.feedback_delay_ms.is_some() {
+        let gain = subject.subject.arm.feedback.position_gain_n_per_m;
+        for map in
+            std::iter::once(&mut hidden.parameters).chain(hidden.each.iter_mut().map(|(_, p)| p))
+        {
+            map.insert("feedback_position_gain_n_per_m".into(), gain);
+        }
+    }
+    Ok(Generated {
+        dir: subject.dir.clone(),
+        hidden,
+    })
 }
 
 #[cfg(test)]

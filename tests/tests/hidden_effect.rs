@@ -482,9 +482,24 @@ fn a_reflex_and_a_heavier_handle_are_both_named() {
 /// cause was named, and whether `unexplained` holds the term of the hidden law with
 /// its coefficient on the y axis (the reach's, where the carts travel 10 cm; the x cart
 /// moves only under the pulses) within 20 %: a cable spring's stiffness as the position
-/// term's `−k`, a low-pass's time constant `1/(2π f_c)` as the force-rate term's.
+/// term's `−k`, a low-pass's time constant `1/(2π f_c)` as the force-rate term's. A late
+/// feedback is the subject's, so it is looked for in the hand balance's `unexplained`:
+/// the late-feedback term with its delay within 20 % of the subject's (its gain comes
+/// out high, README).
 fn judge_outside(g: &Generated, d: &Diagnosis) -> (bool, bool) {
     let p = &g.hidden.parameters;
+    if g.hidden.effect == "late-feedback" {
+        let want = p["feedback_delay_ms"];
+        let found = d.hand_unexplained.as_ref().is_some_and(|u| {
+            u.terms.iter().any(|t| {
+                t.term == "late-feedback"
+                    && t.settings
+                        .get("delay_ms")
+                        .is_some_and(|ms| (ms - want).abs() <= 0.2 * want)
+            })
+        });
+        return (d.causes.is_empty(), found);
+    }
     let (term, want) = if g.hidden.effect == "cable-spring" {
         ("position", -p["stiffness_y_n_per_m"])
     } else {
@@ -501,11 +516,12 @@ fn judge_outside(g: &Generated, d: &Diagnosis) -> (bool, bool) {
     (d.causes.is_empty(), found)
 }
 
-fn check_outside(effect: &str, seed: u64) {
-    let (g, d) = run(effect, seed);
+fn check_outside(effect: &str, seed: u64, design: &Design) {
+    let (g, d) = run_design(effect, seed, design);
     eprintln!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
     eprintln!("named {:?}", d.causes);
     eprintln!("unexplained {:?}", d.unexplained);
+    eprintln!("hand unexplained {:?}", d.hand_unexplained);
     for r in d.ranking.iter().take(3) {
         eprintln!("  {:<16} gain {:>7.3} {:?}", r.name, r.gain, r.rejected);
     }
@@ -519,7 +535,7 @@ fn check_outside(effect: &str, seed: u64) {
 /// within 20 %.
 #[test]
 fn a_cable_spring_is_unexplained_not_a_ripple() {
-    check_outside("cable-spring", 4000);
+    check_outside("cable-spring", 4000, &Design::SHARED);
 }
 
 /// A force sensor read through a low-pass: no catalog effect (not a grip compliance: the
@@ -527,30 +543,52 @@ fn a_cable_spring_is_unexplained_not_a_ripple() {
 /// `unexplained` holds `τ · dF/dt` with `τ` within 20 % of the filter's.
 #[test]
 fn a_sensor_lag_is_unexplained_not_a_grip() {
-    check_outside("sensor-lowpass", 4001);
+    check_outside("sensor-lowpass", 4001, &Design::SHARED);
+}
+
+/// A subject whose feedback acts at 110–160 ms instead of the model's 60 ms, in a
+/// session with 9 pulses per angle (the shared layout's 3 leave the late feedback's
+/// gain under the test's noise, README): no catalog effect (not a reflex, not a mass),
+/// and the hand balance's `unexplained` holds the late-feedback term with its delay
+/// within 20 % of the subject's.
+#[test]
+fn a_late_feedback_is_unexplained_not_a_reflex() {
+    check_outside("late-feedback", 4001, &Design::with_pulses(9));
 }
 
 /// Sessions hiding an effect outside the catalog: `SWEEP_SEEDS` (default 20) per effect
-/// of [`OUT_OF_CATALOG`], seeds 4000 on; prints how often no catalog cause was named
-/// and how often `unexplained` held the hidden law within 20 %.
+/// of [`OUT_OF_CATALOG`] (or `SWEEP_EFFECTS`), seeds 4000 on, on [`sweep_design`]'s
+/// layout; prints how often no catalog cause was named, how often either balance
+/// reported `unexplained` structure and how often it held the hidden law within 20 %.
 #[test]
 #[ignore = "about 40 sessions; run with --ignored to measure out-of-catalog sessions"]
 fn sweep_out_of_catalog() {
     let seeds = sweep_seeds(20);
+    let design = sweep_design();
+    let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
+        .ok()
+        .map(|v| v.split(',').map(str::to_string).collect());
     let mut rows = Vec::new();
     for effect in OUT_OF_CATALOG {
+        if only
+            .as_ref()
+            .is_some_and(|o| !o.iter().any(|e| e == effect))
+        {
+            continue;
+        }
         let (mut none, mut found, mut any) = (0, 0, 0);
         for seed in 0..seeds {
-            let (g, d) = run(effect, 4000 + seed);
+            let (g, d) = run_design(effect, 4000 + seed, &design);
             let (n, f) = judge_outside(&g, &d);
             none += usize::from(n);
             found += usize::from(f);
-            any += usize::from(d.unexplained.is_some());
+            any += usize::from(d.unexplained.is_some() || d.hand_unexplained.is_some());
             eprintln!(
-                "{effect} seed {seed}: hidden {:?}; named {:?}; unexplained {:?}",
+                "{effect} seed {seed}: hidden {:?}; named {:?}; unexplained {:?}; hand {:?}",
                 g.hidden.parameters,
                 d.causes.iter().map(|c| &c.name).collect::<Vec<_>>(),
-                d.unexplained.as_ref().map(|u| &u.hint)
+                d.unexplained.as_ref().map(|u| &u.hint),
+                d.hand_unexplained.as_ref().map(|u| &u.hint)
             );
         }
         rows.push(format!(
@@ -604,19 +642,28 @@ fn sweep_two_effects() {
 }
 
 /// The false-alarm rate: `SWEEP_SEEDS` (default 60) realistic sessions hiding nothing
-/// (seeds 2000 on), each diagnosed blind; prints every named cause and the rate with
-/// its exact one-sided 95 % upper bound, and asserts at most 5 %.
+/// (seeds 2000 on, on [`sweep_design`]'s layout), each diagnosed blind; prints every
+/// named cause and either balance's `unexplained`, and the rate with its exact
+/// one-sided 95 % upper bound, and asserts at most 5 %.
 #[test]
 #[ignore = "about 60 sessions; run with --ignored to measure the false-alarm rate"]
 fn sweep_false_alarms() {
     let seeds = sweep_seeds(60);
     let mut alarms = 0;
     let mut unexplained = 0;
+    let design = sweep_design();
     for seed in 0..seeds {
-        let (_, d) = run("none", 2000 + seed);
-        if let Some(u) = &d.unexplained {
+        let (_, d) = run_design("none", 2000 + seed, &design);
+        if d.unexplained.is_some() || d.hand_unexplained.is_some() {
             unexplained += 1;
-            eprintln!("seed {}: unexplained {}", 2000 + seed, u.hint);
+        }
+        for u in d.unexplained.iter().chain(&d.hand_unexplained) {
+            eprintln!(
+                "seed {}: unexplained ({}) {}",
+                2000 + seed,
+                u.balance,
+                u.hint
+            );
         }
         if !d.causes.is_empty() {
             alarms += 1;
@@ -704,7 +751,7 @@ fn sweep_confusion_matrix() {
                 .unwrap_or(EFFECTS.len());
             matrix[i][j] += 1;
             extra[i] += usize::from(d.causes.len() > usize::from(i > 0));
-            unexplained[i] += usize::from(d.unexplained.is_some());
+            unexplained[i] += usize::from(d.unexplained.is_some() || d.hand_unexplained.is_some());
             eprintln!(
                 "{effect} seed {seed}: hidden {:?}, found {} {:?} gain {:?} (hand baseline {:?})",
                 g.hidden.parameters, d.cause, d.parameters, d.gain, d.hand_baseline_nrmse

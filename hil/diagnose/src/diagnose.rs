@@ -60,9 +60,11 @@ use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
 use super::hand::{
-    HandCandidate, HandJudgement, ReplicateTest, baseline_parameters, hand_candidate, judge_hand,
+    HandCandidate, HandJudgement, ReplicateTest, baseline_parameters, hand_candidate,
+    hand_fit_rows, judge_hand,
 };
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
+use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
 use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
@@ -208,11 +210,12 @@ pub struct Cause {
     pub given: Vec<String>,
 }
 
-/// Structure the catalog leaves in the cart balance: terms of the library
-/// ([`super::unexplained`]) that pass every test given the named causes.
+/// Structure the catalog leaves in a balance: terms of its library (the cart's
+/// [`super::unexplained`], the hand's `hand_library.rs`) that pass every test
+/// given the named causes.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Unexplained {
-    /// The balance (`cart`).
+    /// The balance (`cart` or `hand`).
     pub balance: String,
     /// The named causes the terms were judged against.
     pub given: Vec<String>,
@@ -221,10 +224,14 @@ pub struct Unexplained {
     /// The terms in the order they entered.
     pub terms: Vec<FoundTerm>,
     /// Correlation of the residual (without the terms) with the carts' position,
-    /// velocity, acceleration, sensor force, motor command and time in the trial.
+    /// velocity, acceleration, sensor force, motor command and time in the trial; on
+    /// the hand balance with the handle's displacement, velocity and acceleration, the
+    /// hand's force and the time since the pulse's onset (all in the response).
     pub correlations: BTreeMap<String, f64>,
     /// Share of the residual's power (without the terms) in each band of
-    /// [`super::BANDS_HZ`] (`"0-2 Hz"`, ...), Welch over every trial and axis.
+    /// [`super::BANDS_HZ`] (`"0-2 Hz"`, ...), Welch over every trial and axis (on the
+    /// hand balance, one periodogram per response and axis over its 0.3 s window, so
+    /// the lowest band holds its first bin only).
     pub band_shares: BTreeMap<String, f64>,
     /// A sentence: the law the terms fit and what it hints at.
     pub hint: String,
@@ -235,13 +242,14 @@ pub struct Unexplained {
 pub struct FoundTerm {
     /// The term's name (`position`, ...).
     pub term: String,
-    /// The fitted law of the force on each cart.
+    /// The fitted law of the force on each axis (on a cart; for the hand balance, of the
+    /// hand's restoring force `−ΔF_hand`).
     pub law: String,
     /// Unit of the coefficients.
     pub unit: String,
-    /// Coefficient of the force on the x cart.
+    /// Coefficient of the law on the x axis.
     pub coefficient_x: f64,
-    /// Coefficient of the force on the y cart.
+    /// Coefficient of the law on the y axis.
     pub coefficient_y: f64,
     /// Jackknife standard error of `coefficient_x` over the folds.
     pub se_x: f64,
@@ -251,6 +259,9 @@ pub struct FoundTerm {
     pub gain: f64,
     /// What such a term hints at.
     pub meaning: String,
+    /// The term's setting, when it has one (the late feedback's `delay_ms`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub settings: BTreeMap<String, f64>,
 }
 
 /// The outcome of [`diagnose`], as `rigtwin diagnose --json` prints it.
@@ -327,6 +338,11 @@ pub struct Diagnosis {
     /// Structure left in the cart balance that no catalog effect explains, with the law
     /// it fits (`None` when the residual has none that passes the tests).
     pub unexplained: Option<Unexplained>,
+    /// Structure left in the hand balance that no human-side catalog effect explains,
+    /// given the named ones, with the law it fits from the hand's library
+    /// (`hil/diagnose/src/hand_library.rs`; `None` when none passes the tests or the hand balance
+    /// was not judged).
+    pub hand_unexplained: Option<Unexplained>,
     /// The best candidate after the cause (or the best one when the cause is `none`).
     pub runner_up: Option<String>,
     /// The decision rule.
@@ -782,8 +798,13 @@ fn residual_structure(
             }
         }
     }
+    Ok((correlations_of(&NAMES, &pairs), band_shares_of(bands)))
+}
+
+/// Each band's share of the summed power `bands` (of [`BANDS_HZ`]), by the band's name.
+fn band_shares_of(bands: [f64; BANDS_HZ.len()]) -> ByName {
     let total: f64 = bands.iter().sum();
-    let shares = BANDS_HZ
+    BANDS_HZ
         .iter()
         .zip(bands)
         .map(|(band, p)| {
@@ -792,10 +813,15 @@ fn residual_structure(
                 if total > 0.0 { p / total } else { 0.0 },
             )
         })
-        .collect();
-    let corr = NAMES
+        .collect()
+}
+
+/// The Pearson correlation of each named signal's pairs `(signal, residual)` (both
+/// already centred), by the signal's name.
+fn correlations_of(names: &[&str], pairs: &[Vec<(f64, f64)>]) -> ByName {
+    names
         .iter()
-        .zip(&pairs)
+        .zip(pairs)
         .map(|(n, p)| {
             let (sxy, sxx, syy) = p.iter().fold((0.0, 0.0, 0.0), |(a, b, c), (x, y)| {
                 (a + x * y, b + x * x, c + y * y)
@@ -807,8 +833,7 @@ fn residual_structure(
             };
             (n.to_string(), r)
         })
-        .collect();
-    Ok((corr, shares))
+        .collect()
 }
 
 /// What forward selection named on the cart balance.
@@ -964,6 +989,7 @@ impl TermSelection {
                     se_y: g(&se, "y"),
                     gain: r.gain,
                     meaning: t.meaning().to_string(),
+                    settings: BTreeMap::new(),
                 }
             })
             .collect()
@@ -1153,6 +1179,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         ranking: Vec::new(),
         conditional: Vec::new(),
         unexplained: None,
+        hand_unexplained: None,
         runner_up: None,
         threshold: None,
         not_judged: Vec::new(),
@@ -1579,6 +1606,7 @@ fn rank_hand(
                 scale,
             };
             let selected = hand_forward_select(&judge, &ranked)?;
+            d.hand_unexplained = hand_outside_the_catalog(&judge, &selected.members)?;
             hand_named = selected.causes;
             hand_lead = selected.lead;
             d.conditional.extend(selected.rounds);
@@ -1718,6 +1746,8 @@ struct HandSelection {
     rounds: Vec<Ranked>,
     /// The row that leads the causes against the baseline.
     lead: Option<Ranked>,
+    /// The named effects at their settings (for the library given them).
+    members: Vec<HandMember>,
 }
 
 /// A candidate fitted jointly with the named effects `chosen` and judged against them
@@ -1776,6 +1806,7 @@ fn hand_forward_select(
                     causes: Vec::new(),
                     rounds: Vec::new(),
                     lead: None,
+                    members: Vec::new(),
                 });
             }
         },
@@ -1829,6 +1860,7 @@ fn hand_forward_select(
         causes,
         rounds,
         lead: Some(lead),
+        members: chosen,
     })
 }
 
@@ -1920,6 +1952,177 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
         .max_by(|a, b| a.lead.gain.total_cmp(&b.lead.gain)))
 }
 
+/// The hand's library ([`super::hand_library`]) selected forward given the named
+/// human-side effects `named` (each at its setting): in each round every term not yet
+/// chosen is fitted jointly with them and the terms chosen so far and judged against
+/// them alone by the hand balance's rules ([`hand_joint_row`]), and must make at least
+/// [`FORCE_RESOLUTION_N`] of force in the responses; the best that passes enters, at
+/// most [`MAX_HAND_TERMS`]. What entered is the hand balance's `unexplained` structure,
+/// with the law it fits and where the residual without it lives.
+fn hand_outside_the_catalog(
+    judge: &HandJudge<'_>,
+    named: &[HandMember],
+) -> Result<Option<Unexplained>, DiscrepancyError> {
+    let h = judge.h;
+    let fit_given = |members: &[HandMember]| -> Result<HandJointFit, DiscrepancyError> {
+        fit_on_units(h, &settle_grip_load(HandJoint::given(members.to_vec()), h)?)
+    };
+    let start_joint = settle_grip_load(HandJoint::given(named.to_vec()), h)?;
+    let start = fit_on_units(h, &start_joint)?;
+    let start_nrmse = start.fit.nrmse();
+    let mut members = named.to_vec();
+    // The model the next term is judged against, once a term has entered.
+    let mut later: Option<HandJointFit> = None;
+    let mut chosen: Vec<(HandTerm, Ranked)> = Vec::new();
+    let mut last: Option<(HandJoint, CvFit)> = None;
+    for _ in 0..MAX_HAND_TERMS {
+        let mut round: Vec<(Ranked, HandTerm, HandJoint, CvFit)> = HAND_LIBRARY
+            .into_par_iter()
+            .filter(|t| chosen.iter().all(|(c, _)| c != t))
+            .map(|t| {
+                let base = later.as_ref().unwrap_or(&start);
+                let (mut r, joint, fit) = hand_joint_row(judge, &members, Arc::new(t), base)?;
+                let coef = [
+                    r.parameters.get("x").copied().unwrap_or(f64::NAN),
+                    r.parameters.get("y").copied().unwrap_or(f64::NAN),
+                ];
+                let peak = t.peak_force_n(coef, fit.fit.setting, &h.responses);
+                if peak[0].max(peak[1]).is_nan() || peak[0].max(peak[1]) < FORCE_RESOLUTION_N {
+                    r.rejected.push(format!(
+                        "immaterial: at most {:.3} N on x, {:.3} N on y, below the rig's {FORCE_RESOLUTION_N} N",
+                        peak[0], peak[1]
+                    ));
+                    r.significant = false;
+                }
+                Ok((r, t, joint, fit.fit))
+            })
+            .collect::<Result<Vec<_>, DiscrepancyError>>()?;
+        round.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
+        let Some((r, t, joint, fit)) = round.into_iter().find(|(r, ..)| r.significant) else {
+            break;
+        };
+        members = joint.fixed.clone();
+        members.push((joint.next.clone(), fit.setting));
+        chosen.push((t, r));
+        later = Some(fit_given(&members)?);
+        last = Some((joint, fit));
+    }
+    let (Some((joint, fit)), Some((_, r_last))) = (last, chosen.last()) else {
+        return Ok(None);
+    };
+    // Each term's coefficients per axis from the last joint fit, with their jackknife
+    // errors over the folds.
+    let fb = h.fb_delay_s;
+    let all = joint.member_parameters(fit.setting, &fit.beta, fb);
+    let per_fold: Vec<_> = fit
+        .folds
+        .iter()
+        .map(|f| joint.member_parameters(f.setting, &f.beta, fb))
+        .collect();
+    let k0 = all.len() - chosen.len();
+    let settings: Vec<usize> = joint
+        .fixed
+        .iter()
+        .map(|(_, s)| *s)
+        .chain([fit.setting])
+        .collect();
+    let terms: Vec<FoundTerm> = chosen
+        .iter()
+        .enumerate()
+        .map(|(i, (t, r))| {
+            let fp: Vec<Vec<(String, f64)>> =
+                per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
+            let (p, se) = params_with_se(all[k0 + i].1.clone(), &fp);
+            let g = |m: &BTreeMap<String, f64>, k: &str| m.get(k).copied().unwrap_or(f64::NAN);
+            let s = settings[k0 + i];
+            FoundTerm {
+                term: t.term_name().to_string(),
+                law: t.law([g(&p, "x"), g(&p, "y")], s),
+                unit: t.unit().to_string(),
+                coefficient_x: g(&p, "x"),
+                coefficient_y: g(&p, "y"),
+                se_x: g(&se, "x"),
+                se_y: g(&se, "y"),
+                gain: r.gain,
+                meaning: t.meaning().to_string(),
+                settings: p
+                    .iter()
+                    .filter(|(k, _)| !matches!(k.as_str(), "x" | "y"))
+                    .map(|(k, v)| (k.clone(), *v))
+                    .collect(),
+            }
+        })
+        .collect();
+    let (correlations, band_shares) = hand_residual_structure(h, &start_joint, &start.fit);
+    Ok(Some(Unexplained {
+        balance: "hand".into(),
+        given: named.iter().map(|(c, _)| c.name().to_string()).collect(),
+        gain: 1.0 - r_last.extended_nrmse / start_nrmse,
+        hint: terms
+            .iter()
+            .map(|t| format!("the hand's restoring force ≈ {} ({})", t.law, t.meaning))
+            .collect::<Vec<_>>()
+            .join("; plus "),
+        terms,
+        correlations,
+        band_shares,
+    }))
+}
+
+/// Where the hand balance's residual of the named effects' model `joint` (with `fit`'s
+/// coefficients on all units, unweighted, each unit's mean per axis taken out like its
+/// offsets) lives: its Pearson correlation with the handle's displacement, velocity and
+/// acceleration, the hand's force and the time since the onset, both axes' rows pooled;
+/// and the share of its power in each band of [`BANDS_HZ`] (one periodogram per unit
+/// and axis over the response window).
+fn hand_residual_structure(h: &HandJudgement, joint: &HandJoint, fit: &CvFit) -> (ByName, ByName) {
+    const NAMES: [&str; 5] = [
+        "displacement",
+        "velocity",
+        "acceleration",
+        "hand force",
+        "time since onset",
+    ];
+    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NAMES.len()];
+    let mut bands = [0.0_f64; BANDS_HZ.len()];
+    for r in &h.responses {
+        let rows = hand_fit_rows(joint, r, fit.setting, &fit.beta, h.fb_delay_s, None);
+        for axis in 0..2 {
+            let e: Vec<f64> = rows
+                .iter()
+                .skip(axis)
+                .step_by(2)
+                .map(|(y, f, _)| y - f)
+                .collect();
+            let m = e.iter().sum::<f64>() / e.len().max(1) as f64;
+            let e: Vec<f64> = e.iter().map(|v| v - m).collect();
+            if let Ok(psd) = welch(&e, r.rate_hz, e.len()) {
+                for (b, band) in bands.iter_mut().zip(BANDS_HZ) {
+                    *b += band_power(&psd.freq_hz, &psd.density, band);
+                }
+            }
+            let at = |x: &[f64]| -> Vec<f64> { r.rows.iter().map(|&j| x[j]).collect() };
+            let time: Vec<f64> = r
+                .rows
+                .iter()
+                .map(|&j| (j as f64 - r.onset as f64) / r.rate_hz)
+                .collect();
+            let cols = [
+                at(&r.dx[axis]),
+                at(&r.dv[axis]),
+                at(&r.da[axis]),
+                at(&r.df[axis]),
+                time,
+            ];
+            for (k, col) in cols.iter().enumerate() {
+                let mc = col.iter().sum::<f64>() / col.len().max(1) as f64;
+                pairs[k].extend(col.iter().zip(&e).map(|(x, v)| (x - mc, *v)));
+            }
+        }
+    }
+    (correlations_of(&NAMES, &pairs), band_shares_of(bands))
+}
+
 /// The decision between the balances: each balance's causes in the order of selection,
 /// the balance whose first cause gains more first;
 /// the ranking, the rule and the evidence.
@@ -2005,7 +2208,9 @@ fn decide(
                  and the pair passes against the baseline. \
                  Laws outside the catalog (the library of hil/diagnose/src/unexplained.rs) compete on the \
                  cart balance: a cause they explain better and to which it adds nothing given them is \
-                 rejected, and what they still explain given the causes is reported as unexplained",
+                 rejected, and what they still explain given the causes is reported as unexplained; the \
+                 hand's library (hil/diagnose/src/hand_library.rs) is judged by the hand balance's rules \
+                 given its named causes and what passes is reported as the hand's unexplained",
                 opts.alpha,
                 alpha_each,
                 match (hand_df, hand_t) {

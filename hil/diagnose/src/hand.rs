@@ -312,7 +312,7 @@ pub trait HandCandidate: Sync + Send {
 /// The rows of an effect's candidate: the baseline's on the effect's kinematics
 /// ([`HandCandidate::hand_kin`]) with its own regressors ([`HandCandidate::extra`]) after
 /// them.
-fn effect_rows(
+pub(crate) fn effect_rows(
     c: &dyn HandCandidate,
     r: &HandResponse,
     s: usize,
@@ -1295,6 +1295,97 @@ mod tests {
             (gain_alone - gain).abs() > 0.01 * gain,
             "the reflex alone finds {gain_alone}"
         );
+    }
+
+    /// The hand's library finds laws the catalog lacks in a response built exactly of
+    /// the baseline (its feedback at 60 ms) plus the law: a subject's second feedback at
+    /// 130 ms, and a stiffness growing with the cube of the stretch. Each term's
+    /// least-squares fit leaves nothing (< 1e-12 of the force) with its coefficients
+    /// exact to 1e-6, the late feedback at its own delay and at no other on the grid
+    /// (10 ms away leaves more than 1e-6), and the baseline alone cannot carry either.
+    #[test]
+    fn the_hand_library_finds_a_late_feedback_and_a_cubic_stiffness() {
+        use crate::hand_library::{HandTerm, LATE_FEEDBACK_MS};
+        let base = moving_response();
+        let (rate, n, m, sh) = (base.rate_hz, base.df[0].len(), base.m_arm[0], base.s[0]);
+        let (d, k, p, fb) = (
+            Matrix2::new(12.0, -3.0, 5.0, 9.0),
+            Matrix2::new(420.0, 60.0, -140.0, 310.0),
+            480.0,
+            0.06,
+        );
+        let rho = feedback_velocity_ratio_s();
+        let at = |v: &[Vec<f64>; 2], j: usize, lag: f64| {
+            Vector2::new(lagged(&v[0], j, lag), lagged(&v[1], j, lag))
+        };
+        let with_force = |extra: &dyn Fn(usize) -> Vector2<f64>| {
+            let mut r = base.clone();
+            let df: Vec<Vector2<f64>> = (0..n)
+                .map(|j| {
+                    let a = Vector2::new(base.da[0][j], base.da[1][j]);
+                    -(m * a
+                        + d * at(&base.dv, j, 0.0)
+                        + k * at(&base.dx, j, 0.0)
+                        + p * sh * (at(&base.dx, j, fb * rate) + rho * at(&base.dv, j, fb * rate))
+                        + extra(j))
+                })
+                .collect();
+            for axis in 0..2 {
+                r.df[axis] = df.iter().map(|f| f[axis]).collect();
+            }
+            r
+        };
+        let fit = |c: &dyn HandCandidate, r: &HandResponse, s: usize| {
+            let mut g = Gram::new(c.columns());
+            c.rows(r, s, fb, &mut |x, y, nrm| g.push(x, y, nrm));
+            let beta = g.solve().unwrap_or_default();
+            (g.sse(&beta) / g.norm_sq, beta)
+        };
+        let coefficient = |t: HandTerm, s: usize, beta: &[f64], key: &str| {
+            t.parameters(s, beta, fb)
+                .into_iter()
+                .find(|(k, _)| k == key)
+                .map_or(f64::NAN, |(_, v)| v)
+        };
+
+        // A second feedback at 130 ms (one gain for both axes, through the same shape).
+        let (late_s, c_late) = (0.13, 350.0);
+        let r = with_force(&|j| {
+            c_late * sh * (at(&base.dx, j, late_s * rate) + rho * at(&base.dv, j, late_s * rate))
+        });
+        let t = HandTerm::LateFeedback;
+        let s = ((late_s * 1e3 - LATE_FEEDBACK_MS.0) / LATE_FEEDBACK_MS.2).round() as usize;
+        let (rel, beta) = fit(&t, &r, s);
+        assert!(rel < 1e-12, "the late feedback leaves {rel} of the force");
+        for (key, want) in [("x", c_late), ("y", c_late)] {
+            let got = coefficient(t, s, &beta, key);
+            assert!((got - want).abs() < 1e-6 * want, "{key}: {got} for {want}");
+        }
+        assert!((coefficient(t, s, &beta, "delay_ms") - 130.0).abs() < 1e-9);
+        for other in [s - 1, s + 1] {
+            let (rel_other, _) = fit(&t, &r, other);
+            assert!(rel_other > 1e-6, "{other}: {rel_other}");
+        }
+        let (rel_base, _) = fit(&HandBaseline, &r, 0);
+        assert!(rel_base > 1e-6, "the baseline alone leaves only {rel_base}");
+
+        // A stiffness growing with the cube of the stretch (3e8 N/m³: 0.3 N at 1 mm).
+        let c3 = [3e8, -2e8];
+        let r = with_force(&|j| {
+            Vector2::new(c3[0] * base.dx[0][j].powi(3), c3[1] * base.dx[1][j].powi(3))
+        });
+        let t = HandTerm::CubicStiffness;
+        let (rel, beta) = fit(&t, &r, 0);
+        assert!(rel < 1e-12, "the cubic stiffness leaves {rel} of the force");
+        for (key, want) in [("x", c3[0]), ("y", c3[1])] {
+            let got = coefficient(t, 0, &beta, key);
+            assert!(
+                (got - want).abs() < 1e-6 * want.abs(),
+                "{key}: {got} for {want}"
+            );
+        }
+        let (rel_base, _) = fit(&HandBaseline, &r, 0);
+        assert!(rel_base > 1e-6, "the baseline alone leaves only {rel_base}");
     }
 
     /// A grip loaded with a mass on the handle's side is the grip under the force the

@@ -37,6 +37,7 @@ mod friction;
 mod gram;
 mod hand;
 mod hand_joint;
+mod hand_library;
 mod hand_signals;
 mod joint;
 mod model;
