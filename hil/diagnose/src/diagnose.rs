@@ -968,31 +968,57 @@ impl TermSelection {
             .iter()
             .enumerate()
             .map(|(i, (t, r))| {
-                let fp: Vec<Vec<(String, f64)>> =
-                    per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
-                let (p, se) = params_with_se(all[k0 + i].1.clone(), &fp);
-                let g = |m: &BTreeMap<String, f64>, k: &str| m.get(k).copied().unwrap_or(f64::NAN);
-                FoundTerm {
-                    term: t.name().to_string(),
-                    law: format!(
-                        "{:.4} {u} · {} on x, {:.4} {u} · {} on y",
-                        g(&p, "x"),
-                        t.expression("x"),
-                        g(&p, "y"),
-                        t.expression("y"),
-                        u = t.unit()
-                    ),
-                    unit: t.unit().to_string(),
-                    coefficient_x: g(&p, "x"),
-                    coefficient_y: g(&p, "y"),
-                    se_x: g(&se, "x"),
-                    se_y: g(&se, "y"),
-                    gain: r.gain,
-                    meaning: t.meaning().to_string(),
-                    settings: BTreeMap::new(),
-                }
+                let fp = per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
+                found_term(
+                    all[k0 + i].1.clone(),
+                    fp,
+                    r,
+                    (t.name(), t.unit(), t.meaning()),
+                    |c| {
+                        format!(
+                            "{:.4} {u} · {} on x, {:.4} {u} · {} on y",
+                            c[0],
+                            t.expression("x"),
+                            c[1],
+                            t.expression("y"),
+                            u = t.unit()
+                        )
+                    },
+                )
             })
             .collect()
+    }
+}
+
+/// A library term found (`r` its row), from its parameters `params` in the joint fit on
+/// all data and `fold_params` in the folds': the coefficients `x` and `y` with their
+/// jackknife errors, every other parameter a setting; `text` its name, unit and meaning,
+/// `law` the law's sentence from the coefficients `[x, y]`.
+fn found_term(
+    params: Vec<(String, f64)>,
+    fold_params: Vec<Vec<(String, f64)>>,
+    r: &Ranked,
+    text: (&str, &str, &str),
+    law: impl Fn([f64; 2]) -> String,
+) -> FoundTerm {
+    let (p, se) = params_with_se(params, &fold_params);
+    let g = |m: &BTreeMap<String, f64>, k: &str| m.get(k).copied().unwrap_or(f64::NAN);
+    let (term, unit, meaning) = text;
+    FoundTerm {
+        term: term.to_string(),
+        law: law([g(&p, "x"), g(&p, "y")]),
+        unit: unit.to_string(),
+        coefficient_x: g(&p, "x"),
+        coefficient_y: g(&p, "y"),
+        se_x: g(&se, "x"),
+        se_y: g(&se, "y"),
+        gain: r.gain,
+        meaning: meaning.to_string(),
+        settings: p
+            .iter()
+            .filter(|(k, _)| !matches!(k.as_str(), "x" | "y"))
+            .map(|(k, v)| (k.clone(), *v))
+            .collect(),
     }
 }
 
@@ -2030,27 +2056,11 @@ fn hand_outside_the_catalog(
         .iter()
         .enumerate()
         .map(|(i, (t, r))| {
-            let fp: Vec<Vec<(String, f64)>> =
-                per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
-            let (p, se) = params_with_se(all[k0 + i].1.clone(), &fp);
-            let g = |m: &BTreeMap<String, f64>, k: &str| m.get(k).copied().unwrap_or(f64::NAN);
-            let s = settings[k0 + i];
-            FoundTerm {
-                term: t.term_name().to_string(),
-                law: t.law([g(&p, "x"), g(&p, "y")], s),
-                unit: t.unit().to_string(),
-                coefficient_x: g(&p, "x"),
-                coefficient_y: g(&p, "y"),
-                se_x: g(&se, "x"),
-                se_y: g(&se, "y"),
-                gain: r.gain,
-                meaning: t.meaning().to_string(),
-                settings: p
-                    .iter()
-                    .filter(|(k, _)| !matches!(k.as_str(), "x" | "y"))
-                    .map(|(k, v)| (k.clone(), *v))
-                    .collect(),
-            }
+            let fp = per_fold.iter().map(|m| m[k0 + i].1.clone()).collect();
+            let text = (t.term_name(), t.unit(), t.meaning());
+            found_term(all[k0 + i].1.clone(), fp, r, text, |c| {
+                t.law(c, settings[k0 + i])
+            })
         })
         .collect();
     let (correlations, band_shares) = hand_residual_structure(h, &start_joint, &start.fit);
