@@ -29,7 +29,7 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-rotation-mass",
-        "0514a938edc303c8a0a49f2059a6071039892d8504e1a3f8362c9b147d303f62",
+        "19261ecdbd9cc4c1bd251796c6b1339ec74c9b24d2cfc6da777e49fb8ae4b08a",
     ),
 ];
 

@@ -103,8 +103,12 @@ pub const FEEDBACK_DELAYS_MS: [f64; 1] = [60.0];
 pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
 /// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 41 values (~12 % apart).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 41);
-/// Grip time constants `b/k` searched, s.
-pub const GRIP_TIME_S: [f64; 4] = [1e-3, 2.5e-3, 5e-3, 1e-2];
+/// Grip time constants `b/k` searched, s: 1–10 ms about 1.5× apart (a grasp through
+/// skin and soft tissue: a few kN/m with tens of N s/m). On a reflex study's brief
+/// pulses the grip's damping shows, and a coarser grid (1, 2.5, 5, 10 ms) left a misfit
+/// that the hand's library then reported as a late feedback or a saturating damping on
+/// 8 of 20 sessions hiding a grip alone (`hil/docs/notes/2026-12-04-hand-library.md`).
+pub const GRIP_TIME_S: [f64; 7] = [1e-3, 1.5e-3, 2e-3, 3e-3, 4e-3, 6e-3, 1e-2];
 /// Correlation time of the residual the hand balance whitens in time, s ([`Whitening`]).
 /// The residual of a correct model is the arm's motor noise, a leaky Brownian motion in
 /// the activations (000_* section 4; the project's arm uses τ = 50 ms), and the
