@@ -35,9 +35,9 @@ use crate::effect::EffectKind;
 use nalgebra::Vector2;
 
 /// Delays of the late feedback, ms: `(first, last, step)`. The baseline's feedback is at
-/// 60 ms and a reflex at 10–50 ms; long-latency responses of the upper limb reach
-/// ~100 ms and voluntary corrections start at 100–150 ms (Lee & Tatton 1975, via the
-/// reflex literature the arm's feedback delay rests on).
+/// 60 ms and a reflex at 10–50 ms; the long-latency responses to a stretch of the upper
+/// limb reach ~100 ms (the M2 and M3 responses of Lee & Tatton 1975) and voluntary
+/// corrections start at 100–150 ms.
 pub const LATE_FEEDBACK_MS: (f64, f64, f64) = (80.0, 200.0, 10.0);
 
 /// At most this many terms enter the hand's hint.
