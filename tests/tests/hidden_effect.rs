@@ -565,15 +565,10 @@ fn a_late_feedback_is_unexplained_not_a_reflex() {
 fn sweep_out_of_catalog() {
     let seeds = sweep_seeds(20);
     let design = sweep_design();
-    let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
-        .ok()
-        .map(|v| v.split(',').map(str::to_string).collect());
+    let only = sweep_effects();
     let mut rows = Vec::new();
     for effect in OUT_OF_CATALOG {
-        if only
-            .as_ref()
-            .is_some_and(|o| !o.iter().any(|e| e == effect))
-        {
+        if !only.includes(effect) {
             continue;
         }
         let (mut none, mut found, mut any) = (0, 0, 0);
@@ -582,7 +577,7 @@ fn sweep_out_of_catalog() {
             let (n, f) = judge_outside(&g, &d);
             none += usize::from(n);
             found += usize::from(f);
-            any += usize::from(d.unexplained.is_some() || d.hand_unexplained.is_some());
+            any += usize::from(d.unexplained_structures().next().is_some());
             eprintln!(
                 "{effect} seed {seed}: hidden {:?}; named {:?}; unexplained {:?}; hand {:?}",
                 g.hidden.parameters,
@@ -608,13 +603,11 @@ fn sweep_out_of_catalog() {
 #[ignore = "about 100 sessions; run with --ignored to measure two-effect detection"]
 fn sweep_two_effects() {
     let seeds = sweep_seeds(20);
-    let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
-        .ok()
-        .map(|v| v.split(',').map(str::to_string).collect());
+    let only = sweep_effects();
     let design = sweep_design();
     let mut rows = Vec::new();
     for pair in PAIRS {
-        if only.as_ref().is_some_and(|o| !o.iter().any(|e| e == pair)) {
+        if !only.includes(pair) {
             continue;
         }
         let (mut named, mut within) = (0, 0);
@@ -654,10 +647,10 @@ fn sweep_false_alarms() {
     let design = sweep_design();
     for seed in 0..seeds {
         let (_, d) = run_design("none", 2000 + seed, &design);
-        if d.unexplained.is_some() || d.hand_unexplained.is_some() {
+        if d.unexplained_structures().next().is_some() {
             unexplained += 1;
         }
-        for u in d.unexplained.iter().chain(&d.hand_unexplained) {
+        for u in d.unexplained_structures() {
             eprintln!(
                 "seed {}: unexplained ({}) {}",
                 2000 + seed,
@@ -696,6 +689,24 @@ fn sweep_false_alarms() {
     assert!(alarms as f64 <= 0.05 * n, "{alarms} of {seeds}");
 }
 
+/// The rows a sweep runs: those `SWEEP_EFFECTS` names (comma-separated), or all.
+struct SweepEffects(Option<Vec<String>>);
+
+impl SweepEffects {
+    /// Whether the row `name` runs.
+    fn includes(&self, name: &str) -> bool {
+        self.0.as_ref().is_none_or(|o| o.iter().any(|e| e == name))
+    }
+}
+
+fn sweep_effects() -> SweepEffects {
+    SweepEffects(
+        std::env::var("SWEEP_EFFECTS")
+            .ok()
+            .map(|v| v.split(',').map(str::to_string).collect()),
+    )
+}
+
 /// Sessions per row of a sweep: `SWEEP_SEEDS`, or `default`.
 fn sweep_seeds(default: u64) -> u64 {
     std::env::var("SWEEP_SEEDS")
@@ -725,9 +736,7 @@ fn sweep_confusion_matrix() {
     // `SWEEP_SEEDS=5 SWEEP_EFFECTS=none,handle-mass` runs a smaller sweep.
     let seeds = sweep_seeds(20);
     let design = sweep_design();
-    let only: Option<Vec<String>> = std::env::var("SWEEP_EFFECTS")
-        .ok()
-        .map(|v| v.split(',').map(str::to_string).collect());
+    let only = sweep_effects();
     let mut names: Vec<&str> = EFFECTS.to_vec();
     let mut matrix = vec![vec![0usize; EFFECTS.len() + 1]; EFFECTS.len()];
     let mut within = vec![0usize; EFFECTS.len()];
@@ -737,10 +746,7 @@ fn sweep_confusion_matrix() {
     // Sessions where structure outside the catalog was reported.
     let mut unexplained = vec![0usize; EFFECTS.len()];
     for (i, effect) in EFFECTS.iter().enumerate() {
-        if only
-            .as_ref()
-            .is_some_and(|o| !o.iter().any(|e| e == effect))
-        {
+        if !only.includes(effect) {
             continue;
         }
         for seed in 0..seeds {
@@ -751,7 +757,7 @@ fn sweep_confusion_matrix() {
                 .unwrap_or(EFFECTS.len());
             matrix[i][j] += 1;
             extra[i] += usize::from(d.causes.len() > usize::from(i > 0));
-            unexplained[i] += usize::from(d.unexplained.is_some() || d.hand_unexplained.is_some());
+            unexplained[i] += usize::from(d.unexplained_structures().next().is_some());
             eprintln!(
                 "{effect} seed {seed}: hidden {:?}, found {} {:?} gain {:?} (hand baseline {:?})",
                 g.hidden.parameters, d.cause, d.parameters, d.gain, d.hand_baseline_nrmse

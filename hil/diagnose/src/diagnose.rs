@@ -353,6 +353,13 @@ pub struct Diagnosis {
     pub evidence: Vec<String>,
 }
 
+impl Diagnosis {
+    /// The structure each balance left unexplained: the cart's, then the hand's.
+    pub fn unexplained_structures(&self) -> impl Iterator<Item = &Unexplained> {
+        self.unexplained.iter().chain(&self.hand_unexplained)
+    }
+}
+
 /// A candidate with its cross-validated fit, kept for plots and reports.
 pub struct CandidateFit {
     /// The candidate.
@@ -772,17 +779,11 @@ fn residual_structure(
         "motor command",
         "time in trial",
     ];
-    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NAMES.len()];
-    let mut bands = [0.0_f64; BANDS_HZ.len()];
+    let mut structure = ResidualStructure::new(&NAMES);
     for sig in judge.signals {
         let res = joint.residual(sig, 0, &fit.beta, lat)?;
         for (axis, e) in res.iter().enumerate() {
             let fs = sig.rate_hz / sig.decim as f64;
-            if let Ok(psd) = welch(e, fs, (fs.round() as usize).min(e.len())) {
-                for (b, band) in bands.iter_mut().zip(BANDS_HZ) {
-                    *b += band_power(&psd.freq_hz, &psd.density, band);
-                }
-            }
             let time: Vec<f64> = sig.rows.iter().map(|&i| i as f64 / sig.rate_hz).collect();
             let cols = [
                 sig.at_rows(&sig.q[axis]),
@@ -792,48 +793,95 @@ fn residual_structure(
                 sig.at_rows(&sig.u[axis]),
                 time,
             ];
-            for (k, col) in cols.iter().enumerate() {
-                let m = col.iter().sum::<f64>() / col.len().max(1) as f64;
-                pairs[k].extend(col.iter().zip(e).map(|(x, r)| (x - m, *r)));
-            }
+            structure.add(e, fs, (fs.round() as usize).min(e.len()), &cols);
         }
     }
-    Ok((correlations_of(&NAMES, &pairs), band_shares_of(bands)))
+    Ok(structure.finish())
 }
 
-/// Each band's share of the summed power `bands` (of [`BANDS_HZ`]), by the band's name.
-fn band_shares_of(bands: [f64; BANDS_HZ.len()]) -> ByName {
-    let total: f64 = bands.iter().sum();
-    BANDS_HZ
-        .iter()
-        .zip(bands)
-        .map(|(band, p)| {
-            (
-                format!("{}-{} Hz", band[0], band[1]),
-                if total > 0.0 { p / total } else { 0.0 },
-            )
-        })
-        .collect()
+/// Where a residual lives, summed over trials (or responses) and axes: each named
+/// signal's pairs with the residual, both less their mean over the piece, for the
+/// Pearson correlations, and the residual's power in each band of [`BANDS_HZ`] (Welch).
+struct ResidualStructure<'a> {
+    names: &'a [&'a str],
+    pairs: Vec<Vec<(f64, f64)>>,
+    bands: [f64; BANDS_HZ.len()],
 }
 
-/// The Pearson correlation of each named signal's pairs `(signal, residual)` (both
-/// already centred), by the signal's name.
-fn correlations_of(names: &[&str], pairs: &[Vec<(f64, f64)>]) -> ByName {
-    names
-        .iter()
-        .zip(pairs)
-        .map(|(n, p)| {
-            let (sxy, sxx, syy) = p.iter().fold((0.0, 0.0, 0.0), |(a, b, c), (x, y)| {
-                (a + x * y, b + x * x, c + y * y)
-            });
-            let r = if sxx > 0.0 && syy > 0.0 {
-                sxy / (sxx * syy).sqrt()
-            } else {
-                0.0
-            };
-            (n.to_string(), r)
-        })
-        .collect()
+impl<'a> ResidualStructure<'a> {
+    fn new(names: &'a [&'a str]) -> Self {
+        ResidualStructure {
+            names,
+            pairs: vec![Vec::new(); names.len()],
+            bands: [0.0; BANDS_HZ.len()],
+        }
+    }
+
+    /// One piece of residual `e` (one trial's or response's axis) sampled at `fs`, its
+    /// power by Welch with segments of `nperseg`, and the named signals `cols` on the
+    /// same rows, in the order of the names.
+    fn add(&mut self, e: &[f64], fs: f64, nperseg: usize, cols: &[Vec<f64>]) {
+        if let Ok(psd) = welch(e, fs, nperseg) {
+            for (b, band) in self.bands.iter_mut().zip(BANDS_HZ) {
+                *b += band_power(&psd.freq_hz, &psd.density, band);
+            }
+        }
+        for (pairs, col) in self.pairs.iter_mut().zip(cols) {
+            let m = col.iter().sum::<f64>() / col.len().max(1) as f64;
+            pairs.extend(col.iter().zip(e).map(|(x, r)| (x - m, *r)));
+        }
+    }
+
+    /// The correlation with each signal and each band's share of the power, by name.
+    fn finish(self) -> (ByName, ByName) {
+        let corr = self
+            .names
+            .iter()
+            .zip(&self.pairs)
+            .map(|(n, p)| {
+                let (sxy, sxx, syy) = p.iter().fold((0.0, 0.0, 0.0), |(a, b, c), (x, y)| {
+                    (a + x * y, b + x * x, c + y * y)
+                });
+                let r = if sxx > 0.0 && syy > 0.0 {
+                    sxy / (sxx * syy).sqrt()
+                } else {
+                    0.0
+                };
+                (n.to_string(), r)
+            })
+            .collect();
+        let total: f64 = self.bands.iter().sum();
+        let shares = BANDS_HZ
+            .iter()
+            .zip(self.bands)
+            .map(|(band, p)| {
+                (
+                    format!("{}-{} Hz", band[0], band[1]),
+                    if total > 0.0 { p / total } else { 0.0 },
+                )
+            })
+            .collect();
+        (corr, shares)
+    }
+}
+
+/// A library term's row `r` rejected as immaterial when the largest force its law makes
+/// with the row's coefficients (`peak_of([x, y])`, N per axis) is below the rig's
+/// [`FORCE_RESOLUTION_N`] (or not a number).
+fn reject_immaterial_term(
+    r: &mut Ranked,
+    peak_of: impl FnOnce([f64; 2]) -> Result<[f64; 2], DiscrepancyError>,
+) -> Result<(), DiscrepancyError> {
+    let c = |k: &str| r.parameters.get(k).copied().unwrap_or(f64::NAN);
+    let peak = peak_of([c("x"), c("y")])?;
+    if peak[0].max(peak[1]).is_nan() || peak[0].max(peak[1]) < FORCE_RESOLUTION_N {
+        r.rejected.push(format!(
+            "immaterial: at most {:.3} N on x, {:.3} N on y, below the rig's {FORCE_RESOLUTION_N} N",
+            peak[0], peak[1]
+        ));
+        r.significant = false;
+    }
+    Ok(())
 }
 
 /// What forward selection named on the cart balance.
@@ -893,18 +941,7 @@ fn select_terms(
                 };
                 let fit = cross_validate(&grams_of(&joint, judge.signals, lat)?, folds, t.name())?;
                 let mut r = cond.rank(&joint, &fit, &given)?;
-                let coef = [
-                    r.parameters.get("x").copied().unwrap_or(f64::NAN),
-                    r.parameters.get("y").copied().unwrap_or(f64::NAN),
-                ];
-                let peak = peak_force_n(t, coef, judge.signals)?;
-                if peak[0].max(peak[1]).is_nan() || peak[0].max(peak[1]) < FORCE_RESOLUTION_N {
-                    r.rejected.push(format!(
-                        "immaterial: at most {:.3} N on x, {:.3} N on y, below the rig's {FORCE_RESOLUTION_N} N",
-                        peak[0], peak[1]
-                    ));
-                    r.significant = false;
-                }
+                reject_immaterial_term(&mut r, |c| peak_force_n(t, c, judge.signals))?;
                 Ok((r, t, joint, fit))
             })
             .collect::<Result<Vec<_>, DiscrepancyError>>()?;
@@ -1990,10 +2027,8 @@ fn hand_outside_the_catalog(
     named: &[HandMember],
 ) -> Result<Option<Unexplained>, DiscrepancyError> {
     let h = judge.h;
-    let fit_given = |members: &[HandMember]| -> Result<HandJointFit, DiscrepancyError> {
-        fit_on_units(h, &settle_grip_load(HandJoint::given(members.to_vec()), h)?)
-    };
-    let start_joint = settle_grip_load(HandJoint::given(named.to_vec()), h)?;
+    let given = |members: &[HandMember]| settle_grip_load(HandJoint::given(members.to_vec()), h);
+    let start_joint = given(named)?;
     let start = fit_on_units(h, &start_joint)?;
     let start_nrmse = start.fit.nrmse();
     let mut members = named.to_vec();
@@ -2008,18 +2043,9 @@ fn hand_outside_the_catalog(
             .map(|t| {
                 let base = later.as_ref().unwrap_or(&start);
                 let (mut r, joint, fit) = hand_joint_row(judge, &members, Arc::new(t), base)?;
-                let coef = [
-                    r.parameters.get("x").copied().unwrap_or(f64::NAN),
-                    r.parameters.get("y").copied().unwrap_or(f64::NAN),
-                ];
-                let peak = t.peak_force_n(coef, fit.fit.setting, &h.responses);
-                if peak[0].max(peak[1]).is_nan() || peak[0].max(peak[1]) < FORCE_RESOLUTION_N {
-                    r.rejected.push(format!(
-                        "immaterial: at most {:.3} N on x, {:.3} N on y, below the rig's {FORCE_RESOLUTION_N} N",
-                        peak[0], peak[1]
-                    ));
-                    r.significant = false;
-                }
+                reject_immaterial_term(&mut r, |c| {
+                    Ok(t.peak_force_n(c, fit.fit.setting, &h.responses))
+                })?;
                 Ok((r, t, joint, fit.fit))
             })
             .collect::<Result<Vec<_>, DiscrepancyError>>()?;
@@ -2030,7 +2056,7 @@ fn hand_outside_the_catalog(
         members = joint.fixed.clone();
         members.push((joint.next.clone(), fit.setting));
         chosen.push((t, r));
-        later = Some(fit_given(&members)?);
+        later = Some(fit_on_units(h, &given(&members)?)?);
         last = Some((joint, fit));
     }
     let (Some((joint, fit)), Some((_, r_last))) = (last, chosen.last()) else {
@@ -2093,8 +2119,7 @@ fn hand_residual_structure(h: &HandJudgement, joint: &HandJoint, fit: &CvFit) ->
         "hand force",
         "time since onset",
     ];
-    let mut pairs: Vec<Vec<(f64, f64)>> = vec![Vec::new(); NAMES.len()];
-    let mut bands = [0.0_f64; BANDS_HZ.len()];
+    let mut structure = ResidualStructure::new(&NAMES);
     for r in &h.responses {
         let rows = hand_fit_rows(joint, r, fit.setting, &fit.beta, h.fb_delay_s, None);
         for axis in 0..2 {
@@ -2106,11 +2131,6 @@ fn hand_residual_structure(h: &HandJudgement, joint: &HandJoint, fit: &CvFit) ->
                 .collect();
             let m = e.iter().sum::<f64>() / e.len().max(1) as f64;
             let e: Vec<f64> = e.iter().map(|v| v - m).collect();
-            if let Ok(psd) = welch(&e, r.rate_hz, e.len()) {
-                for (b, band) in bands.iter_mut().zip(BANDS_HZ) {
-                    *b += band_power(&psd.freq_hz, &psd.density, band);
-                }
-            }
             let at = |x: &[f64]| -> Vec<f64> { r.rows.iter().map(|&j| x[j]).collect() };
             let time: Vec<f64> = r
                 .rows
@@ -2124,13 +2144,10 @@ fn hand_residual_structure(h: &HandJudgement, joint: &HandJoint, fit: &CvFit) ->
                 at(&r.df[axis]),
                 time,
             ];
-            for (k, col) in cols.iter().enumerate() {
-                let mc = col.iter().sum::<f64>() / col.len().max(1) as f64;
-                pairs[k].extend(col.iter().zip(&e).map(|(x, v)| (x - mc, *v)));
-            }
+            structure.add(&e, r.rate_hz, e.len(), &cols);
         }
     }
-    (correlations_of(&NAMES, &pairs), band_shares_of(bands))
+    structure.finish()
 }
 
 /// The decision between the balances: each balance's causes in the order of selection,

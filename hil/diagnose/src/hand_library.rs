@@ -167,6 +167,9 @@ impl HandTerm {
     /// N, per axis, with coefficients `coef` and setting `s`.
     #[must_use]
     pub fn peak_force_n(self, coef: [f64; 2], s: usize, responses: &[HandResponse]) -> [f64; 2] {
+        if coef.iter().any(|c| !c.is_finite()) {
+            return [f64::NAN; 2];
+        }
         let mut peak = [0.0_f64; 2];
         for r in responses {
             let kin = Kin::rigid(r);
@@ -175,9 +178,6 @@ impl HandTerm {
                     *p = p.max((coef[axis] * self.value(r, &kin, s, axis, j)).abs());
                 }
             }
-        }
-        if coef.iter().any(|c| !c.is_finite()) {
-            return [f64::NAN; 2];
         }
         peak
     }

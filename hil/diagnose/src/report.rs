@@ -251,7 +251,7 @@ pub fn table(d: &Diagnosis) -> String {
             let _ = writeln!(out, "convention: {}: {text}", c.name);
         }
     }
-    for u in d.unexplained.iter().chain(&d.hand_unexplained) {
+    for u in d.unexplained_structures() {
         let mut corr: Vec<(&String, &f64)> = u.correlations.iter().collect();
         corr.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
         let _ = writeln!(

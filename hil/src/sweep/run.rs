@@ -298,7 +298,7 @@ fn diagnose_session(sweep: &SweepFile, dir: &Path) -> Diagnosed {
         named: hidden.is_some(),
         parameter: hidden.and_then(|(e, c)| c.parameters.get(&e.parameter).copied()),
         gain: hidden.map(|(_, c)| c.gain),
-        unexplained: d.unexplained.is_some() || d.hand_unexplained.is_some(),
+        unexplained: d.unexplained_structures().next().is_some(),
         error: None,
     }
 }
