@@ -4,7 +4,8 @@
 //! `NuisanceConfig::REALISTIC`): a force sensor tared 0.05–0.3 N off and drifting up to
 //! 0.1 N, motor force constants within 1 %, current-loop noise of 0.1–0.3 N RMS that is
 //! not in the logged command, reaction times of 0.20–0.35 s, reach durations ±13 %, end
-//! points scattered by 2–4 mm, and an impedance trending by up to 10 % over the session.
+//! points scattered by 2–4 mm, an impedance trending by up to 10 % over the session,
+//! and a trigger logged 0–1 ms before its pulse acts.
 //!
 //! Asserted per session: the effect's name; each hidden parameter within 20 %; a
 //! held-out gain of at least 50 % (the plant effects are drawn large enough to matter
@@ -57,6 +58,78 @@ fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis
 
 fn check(effect: &str, seed: u64) -> (Generated, Diagnosis) {
     check_with_gain(effect, seed, 0.5)
+}
+
+/// Each perturbed trial's lag from the logged onset to its pulse, ms: the centre of the
+/// logged perturbation force's magnitude minus the logged onset plus half the pulse.
+/// The pulse is symmetric in time, so its centre is where its half-duration puts it.
+fn trigger_lags_ms(dir: &std::path::Path) -> Vec<f64> {
+    let s = Session::read(dir).unwrap();
+    s.iter()
+        .filter_map(|(e, t)| {
+            let p = e.perturbation.as_ref()?;
+            let m: Vec<f64> = t
+                .pert_fx_n
+                .iter()
+                .zip(&t.pert_fy_n)
+                .map(|(x, y)| x.hypot(*y))
+                .collect();
+            let total: f64 = m.iter().sum();
+            let centre = m.iter().zip(&t.t_s).map(|(a, t)| a * t).sum::<f64>() / total;
+            Some((centre - p.onset_s - p.duration_s / 2.0) * 1e3)
+        })
+        .collect()
+}
+
+/// A realistic rig logs its trigger up to 4 ticks (1 ms) before the pulse acts, as the
+/// shared realistic sessions' rig does; the perturbation columns hold the pulse where
+/// it acted. Every lag is a whole number of 0.25 ms ticks within 0–1 ms (to 0.02 ms:
+/// the logged force's 1 mN rounding moves the centre by less), the lags differ from
+/// trial to trial, and the ideal rig's are all 0.
+#[test]
+fn the_logged_onset_leads_the_pulse_by_the_trigger_lag() {
+    let small = Design {
+        trials: 12,
+        repetitions: 1,
+        ..Design::SHARED
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    for (design, name) in [
+        (small.clone(), "realistic"),
+        (
+            Design {
+                nuisance: None,
+                ..small
+            },
+            "ideal",
+        ),
+    ] {
+        let g = generate_design("none", 7, &design, &tmp.path().join(name)).unwrap();
+        let lags = trigger_lags_ms(&g.dir);
+        println!("{name}: lags {lags:.3?} ms");
+        assert_eq!(lags.len(), 8, "{name}: one pulse per angle");
+        for l in &lags {
+            let ticks = l / 0.25;
+            assert!(
+                (ticks - ticks.round()).abs() * 0.25 < 0.02,
+                "{name}: {l} ms is not whole ticks"
+            );
+            assert!((-0.02..=1.02).contains(l), "{name}: {l} ms outside 0-1 ms");
+        }
+        let distinct = lags
+            .iter()
+            .map(|l| (l / 0.25).round() as i64)
+            .collect::<std::collections::BTreeSet<_>>();
+        if design.nuisance.is_some() {
+            assert!(distinct.len() >= 2, "the lag is drawn per trial: {lags:?}");
+        } else {
+            assert_eq!(
+                distinct.into_iter().collect::<Vec<_>>(),
+                vec![0],
+                "{lags:?}"
+            );
+        }
+    }
 }
 
 fn check_with_gain(effect: &str, seed: u64, min_gain: f64) -> (Generated, Diagnosis) {

@@ -9,14 +9,17 @@
 //! points, and the trend of the subject's impedance. Per trial: where the drift has got
 //! to (linear in the trial's place in the session), a re-tare scatter, the reaction time
 //! and the reach's duration (so trial files differ in length), the start and end points,
-//! and a trial-to-trial wobble of the impedance.
+//! a trial-to-trial wobble of the impedance, and the trigger's lag (the pulse starts 0–4
+//! ticks of the 4 kHz loop after the onset the rig logs; its perturbation columns hold
+//! the pulse where it acted).
 //!
 //! The ranges of [`NuisanceConfig::REALISTIC`] are those a lab meets (force sensors tared
 //! to a few tenths of a newton and drifting a tenth over a session; force constants
 //! specified to a few percent and calibrated to about one; reaches paced by a 3 s
 //! metronome that subjects keep to about ±10 %; reaction times of 200–350 ms; end points
 //! scattered by a few millimetres; impedance that drifts with fatigue and attention by
-//! up to ±10 % over a session), and they cover the disclosed nuisances of the shared
+//! up to ±10 % over a session; a trigger logged up to a millisecond before the pulse
+//! acts), and they cover the disclosed nuisances of the shared
 //! realistic sessions (`../shared/recordings/README.md`).
 //!
 //! Drawing is a pure function of the session seed, the subject and the trial index
@@ -61,6 +64,10 @@ pub struct NuisanceConfig {
     pub impedance_trend: f64,
     /// Standard deviation of the impedance's trial-to-trial relative wobble.
     pub impedance_wobble: f64,
+    /// Bound of the trigger's lag, ticks of the 4 kHz loop: the pulse reaches the
+    /// admittance input 0 to this many ticks after the onset the rig logs, drawn
+    /// uniformly per trial (the perturbation columns hold the pulse where it acted).
+    pub trigger_jitter_ticks: u32,
 }
 
 impl NuisanceConfig {
@@ -79,6 +86,7 @@ impl NuisanceConfig {
         endpoint_bias_m: 0.0025,
         impedance_trend: 0.10,
         impedance_wobble: 0.02,
+        trigger_jitter_ticks: 4,
     };
 }
 
@@ -224,6 +232,8 @@ pub struct TrialNuisance {
     pub movement_s: f64,
     /// The factor on the subject's co-contraction (impedance).
     pub impedance_scale: f64,
+    /// Ticks of the 4 kHz loop from the onset the rig logs to the pulse's start.
+    pub trigger_lag_ticks: u64,
 }
 
 impl TrialNuisance {
@@ -262,6 +272,8 @@ impl TrialNuisance {
             whole_ticks(r.movement_s * (1.0 + symmetric(&mut rng, cfg.movement_spread)));
         let impedance_scale = (1.0 + session.impedance_trend * place)
             * (1.0 + normal(&mut rng, cfg.impedance_wobble));
+        // Drawn last: the trial's other draws are those of a rig without it.
+        let trigger_lag_ticks = rng.random_range(0..=u64::from(cfg.trigger_jitter_ticks));
         TrialNuisance {
             rig: RigNuisance {
                 sensor_offset_n,
@@ -275,6 +287,7 @@ impl TrialNuisance {
             still_before_s,
             movement_s,
             impedance_scale: impedance_scale.max(0.1),
+            trigger_lag_ticks,
         }
     }
 }
@@ -283,17 +296,19 @@ impl TrialNuisance {
 /// when the protocol has no `[nuisance]` table (or is not a reach), else copies with the
 /// trial's nuisances in the plant, its reach (start, goal, reaction time, duration; the
 /// trial's length follows) and the subject's co-contraction. The recorded task (the
-/// targets a lab's rig logs) stays the protocol's own.
+/// targets a lab's rig logs) stays the protocol's own. The third value is the trigger's
+/// lag, ticks of the 4 kHz loop by which the logged onset precedes the pulse (0 without
+/// a `[nuisance]` table).
 #[must_use]
 pub fn realise(
     protocol: &Protocol,
     subject: &VirtualSubject,
     session_seed: u64,
     trial: u32,
-) -> (Protocol, VirtualSubject) {
+) -> (Protocol, VirtualSubject, u64) {
     let (mut p, mut s) = (protocol.clone(), subject.clone());
     let (Some(cfg), Some(reach)) = (&protocol.nuisance, &protocol.reach) else {
-        return (p, s);
+        return (p, s, 0);
     };
     let session = SessionNuisance::draw(cfg, session_seed, subject.index);
     let n = TrialNuisance::draw(
@@ -314,7 +329,7 @@ pub fn realise(
         r.movement_s = n.movement_s;
     }
     s.co_contraction_level *= n.impedance_scale;
-    (p, s)
+    (p, s, n.trigger_lag_ticks)
 }
 
 #[cfg(test)]
@@ -356,6 +371,7 @@ mod tests {
             assert!((0.2..=0.35).contains(&t.still_before_s), "{t:?}");
             assert!((t.movement_s / p.reach().movement_s - 1.0).abs() <= 0.13 + 1e-4);
             assert!((t.start_m[1] - p.reach().start_m[1]).abs() < 0.03, "{t:?}");
+            assert!(t.trigger_lag_ticks <= 4, "{t:?}");
         }
     }
 
@@ -364,9 +380,10 @@ mod tests {
     fn no_table_changes_nothing() {
         let p = Protocol::builtin("reach-perturb").unwrap();
         let subject = p.subjects.draw(3, 1);
-        let (q, s) = realise(&p, &subject, 3, 5);
+        let (q, s, lag) = realise(&p, &subject, 3, 5);
         assert_eq!(q, p);
         assert_eq!(s, subject);
+        assert_eq!(lag, 0);
     }
 
     /// A range given the wrong way round, a negative bound or a spread of a half are

@@ -183,7 +183,8 @@ pub struct TrialResult {
     pub sha256: String,
     /// Extremes over all ticks.
     pub extremes: Extremes,
-    /// Force-pulse onset on the table clock, s.
+    /// Force-pulse onset on the table clock, s, as the rig logs it (with a realistic
+    /// rig's trigger lag, up to `nuisance.trigger_jitter_ticks` before the pulse).
     pub onset_s: Option<f64>,
     /// Ground truth at the onset.
     pub onset_truth: Option<OnsetTruth>,
@@ -427,7 +428,7 @@ fn run_trial(
 ) -> Result<Done, RehearseError> {
     // The trial runs with its nuisances (if the protocol has any); its manifest entry
     // keeps the protocol's task, as a lab's rig logs its targets.
-    let (protocol, subject) =
+    let (protocol, subject, trigger_lag) =
         crate::protocol::nuisance::realise(recorded, subject, session_seed, plan.index);
     let (protocol, subject) = (&protocol, &subject);
     let rate = f64::from(protocol.recording.rate_hz);
@@ -456,10 +457,15 @@ fn run_trial(
     let timing_rows = timing.map(|_| sim.rows.iter().map(Block::timing).collect());
     let t_est = protocol.estimate.t_est_s;
     let n_est = (t_est * rate).round() as usize + 1;
-    let onset_s = sim.pulse_onset.map(|k| record::tick_time_s(k, div));
+    // The pulse's own onset (the simulated truth's reference) and the one the rig logs,
+    // `trigger_lag` ticks before it.
+    let pulse_onset_s = sim.pulse_onset.map(|k| record::tick_time_s(k, div));
+    let onset_s = sim
+        .pulse_onset
+        .map(|k| record::tick_time_s(k.saturating_sub(trigger_lag), div));
     let mut twin = None;
     let mut deviation = None;
-    if let (Some(t0), TrialTask::Reach { angle_deg: Some(_) }) = (onset_s, &plan.task) {
+    if let (Some(t0), TrialTask::Reach { angle_deg: Some(_) }) = (pulse_onset_s, &plan.task) {
         let base = trial::simulate(protocol, subject, session_seed, plan, false)?;
         simulated_s += n_ticks as f64 / TICK_HZ as f64;
         let i0 = (t0 * rate).round().max(0.0) as usize;
