@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "e858db67a68ab324488da677b2bb2f1d8d01618e00213fdd6e3fb4d88f698df6",
+        "b44256348c5fda4db99101589aa50592a5caec6ccb9d1753cac2b88fcd0478fc",
     ),
     (
         "example-friction",
-        "aebf31a270086732d4e736a24eb5a098b7e481128af3afe705ca0ff0b7ad9365",
+        "96cbed2629edc89f416096622b5038c94eef20998915275efeca37841dc22a4b",
     ),
     (
         "example-nuisance",
-        "21072677d177ce18d8839fa710a1347197fbc167e9b245be2627d4962d1480c5",
+        "c5fec6ceb7ba6ac982262f8bab61b58aa6c452837616a84c5ea64b673eedbbf8",
     ),
     (
         "example-rotation-mass",
-        "19261ecdbd9cc4c1bd251796c6b1339ec74c9b24d2cfc6da777e49fb8ae4b08a",
+        "f1650ed64238542042db29503e310a2b3047dd9eb7cd82fd631ee7a3cdea1cc0",
     ),
 ];
 

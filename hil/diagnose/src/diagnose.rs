@@ -40,6 +40,16 @@
 //! pairs, one left out at a time (df 11, critical t 2.91; [`super::hand`]), while its
 //! gains are measured on the pairs' averages.
 //!
+//! How well a searched parameter is pinned: besides its jackknife standard error over
+//! the folds ([`Ranked::parameter_se`], which says how much the folds agree), a parameter
+//! the search chooses on a grid (a reflex's or a drive's delay, a ripple's pitch, a
+//! grip's stiffness) gets the range of grid values the test's folds cannot tell from the
+//! best one ([`Ranked::parameter_range`]: a one-sided paired t-test at 5 % on the folds'
+//! held-out errors, so it holds however the samples within a fold are correlated). The
+//! two differ where the folds agree on a value along a ridge that others lie on too: a
+//! reflex on 150 ms pulses has a delay of 26 ± 2.7 ms whose range is 14–35 ms. The range
+//! speaks of the noise, not of a bias the model shares across folds.
+//!
 //! The experiments behind these choices: `hil/docs/notes/2026-12-03-decision-rule.md`.
 
 use std::collections::BTreeMap;
@@ -145,6 +155,14 @@ pub struct Ranked {
     pub parameters: BTreeMap<String, f64>,
     /// Jackknife standard error of each parameter over the folds.
     pub parameter_se: BTreeMap<String, f64>,
+    /// For a parameter the search chooses on a grid (a reflex's delay): the lowest and
+    /// the highest grid value the held-out test cannot tell from the best (a one-sided
+    /// paired t-test at 5 % on the test's folds, `CvFit::settings_kept` in
+    /// `crossval.rs`). A range much wider than the standard error says the session's
+    /// layout does not pin the parameter: the folds agree on a value, but others fit as
+    /// well.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameter_range: BTreeMap<String, [f64; 2]>,
     /// The effects already named that this candidate was fitted jointly with and judged
     /// against (forward selection, [`Diagnosis::conditional`]); empty in the first round.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -204,6 +222,10 @@ pub struct Cause {
     pub parameters: BTreeMap<String, f64>,
     /// Their jackknife standard errors over the folds.
     pub parameter_se: BTreeMap<String, f64>,
+    /// The range of a searched parameter the held-out test cannot tell from the best
+    /// ([`Ranked::parameter_range`]), from the fit its parameters come from.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameter_range: BTreeMap<String, [f64; 2]>,
     /// The causes named before it on the same balance: its gain is measured against a
     /// model that has them, and its parameters (and theirs) come from one joint fit.
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -425,6 +447,47 @@ fn fold_stats(fit: &CvFit, base: &CvFit, base_nrmse: f64) -> (f64, f64, Vec<f64>
     (nrmse, gain, fold_gains, t)
 }
 
+/// The range of a searched parameter over the settings of `fit` its folds cannot tell
+/// from the best (`CvFit::settings_kept`, one-sided at 5 % with the folds' degrees of
+/// freedom), keyed by the parameter the setting is: `setting(s)` names it, or, where
+/// the setting's name is not a parameter's (the delay's `lag_ms` is its `delay_ms`),
+/// the parameter of `parameters_at(s)` equal to the setting's value. Empty where the
+/// setting is no parameter (a friction knee crossed with a choice of velocity is one;
+/// a baseline's `none` is not).
+fn searched_range(
+    fit: &CvFit,
+    setting: impl Fn(usize) -> (&'static str, f64),
+    parameters_at: impl Fn(usize) -> Vec<(String, f64)>,
+    parameters: &BTreeMap<String, f64>,
+) -> BTreeMap<String, [f64; 2]> {
+    let df = fit.folds.len().saturating_sub(1).max(1);
+    let kept = fit.settings_kept(student_t_critical(0.05, df as f64));
+    let mut out = BTreeMap::new();
+    let Some(&first) = kept.first() else {
+        return out;
+    };
+    let (name, value) = setting(first);
+    let name = if parameters.contains_key(name) {
+        name.to_string()
+    } else {
+        match parameters_at(first)
+            .into_iter()
+            .find(|(_, v)| (v - value).abs() <= 1e-9 * value.abs().max(1.0))
+        {
+            Some((n, _)) if parameters.contains_key(&n) => n,
+            _ => return out,
+        }
+    };
+    let (lo, hi) = kept
+        .iter()
+        .map(|&s| setting(s).1)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    out.insert(name, [lo, hi]);
+    out
+}
+
 /// Parameters on all trials and their jackknife spread over the folds.
 fn params_with_se(
     all: Vec<(String, f64)>,
@@ -467,6 +530,7 @@ impl Cause {
             gain: r.gain,
             parameters: r.parameters.clone(),
             parameter_se: r.parameter_se.clone(),
+            parameter_range: r.parameter_range.clone(),
             given: r.given.clone(),
         })
     }
@@ -488,6 +552,8 @@ impl Cause {
         })?;
         self.parameters = parameters;
         self.parameter_se = parameter_se;
+        // The range belonged to the fit whose parameters these replace.
+        self.parameter_range.clear();
         Ok(())
     }
 }
@@ -525,6 +591,12 @@ impl Judge<'_> {
             .collect();
         let (parameters, parameter_se) =
             params_with_se(c.parameters(fit.setting, &fit.beta, lat), &fold_params);
+        let parameter_range = searched_range(
+            fit,
+            |s| c.setting(s),
+            |s| c.parameters(s, &fit.beta, lat),
+            &parameters,
+        );
         let s = fit.setting;
         let mut rejected = immaterial(c.kind(), &parameters, self.scale, lat * 1e3);
         let (at, of) = c.search_position(s);
@@ -555,6 +627,7 @@ impl Judge<'_> {
             evidence_r2: r2,
             parameters,
             parameter_se,
+            parameter_range,
             given: given.to_vec(),
         })
     }
@@ -1772,6 +1845,13 @@ impl HandJudge<'_> {
             self.with_units(c.kind(), c.parameters(fit.setting, &fit.beta, h.fb_delay_s)),
             &fold_params,
         );
+        // On the test's folds: the independent units the t-test uses.
+        let parameter_range = searched_range(
+            test_fit,
+            |s| c.setting(s),
+            |s| c.parameters(s, &test_fit.beta, h.fb_delay_s),
+            &parameters,
+        );
         let mut rejected = Vec::new();
         if !c.physical(fit.setting, &fit.beta) {
             rejected.push("unphysical: a negative mass or reflex gain".to_string());
@@ -1796,6 +1876,7 @@ impl HandJudge<'_> {
             evidence_r2: None,
             parameters,
             parameter_se,
+            parameter_range,
             given: given.to_vec(),
         }
     }

@@ -251,6 +251,27 @@ pub fn table(d: &Diagnosis) -> String {
             let _ = writeln!(out, "convention: {}: {text}", c.name);
         }
     }
+    for c in &d.causes {
+        for (k, [lo, hi]) in &c.parameter_range {
+            let v = c.parameters.get(k).copied().unwrap_or(f64::NAN);
+            let line = if hi > lo {
+                format!(
+                    "the folds cannot tell {} to {} from it{}",
+                    sig(*lo),
+                    sig(*hi),
+                    // Beyond ±20 % of the value: what a lab comparing subjects needs.
+                    if hi - lo > 0.4 * v.abs() {
+                        " (wider than ±20 % of it: this session does not pin it)"
+                    } else {
+                        ""
+                    }
+                )
+            } else {
+                "the folds tell every other value its search tried from it".to_string()
+            };
+            let _ = writeln!(out, "range: {}: {k} {}: {line}", c.name, sig(v));
+        }
+    }
     for u in d.unexplained_structures() {
         let mut corr: Vec<(&String, &f64)> = u.correlations.iter().collect();
         corr.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
