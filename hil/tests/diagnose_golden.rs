@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "b44256348c5fda4db99101589aa50592a5caec6ccb9d1753cac2b88fcd0478fc",
+        "523702497b52214127dc918b9ba8854b5ba966d4f6f988dcb066f86826a971e3",
     ),
     (
         "example-friction",
-        "96cbed2629edc89f416096622b5038c94eef20998915275efeca37841dc22a4b",
+        "17edeac1f773e011209ea76f791e29cda36b6ff8d639b166075535f8693d93e8",
     ),
     (
         "example-nuisance",
-        "c5fec6ceb7ba6ac982262f8bab61b58aa6c452837616a84c5ea64b673eedbbf8",
+        "7ba2bf281c5ffcbae89f23c3d19b9579cb37c6295958f28634b85ce331572408",
     ),
     (
         "example-rotation-mass",
-        "f1650ed64238542042db29503e310a2b3047dd9eb7cd82fd631ee7a3cdea1cc0",
+        "2c72c22ff692f82845f73a60b1d4ada9b4eb0c43d23fb14e53473bcc083af5a9",
     ),
 ];
 

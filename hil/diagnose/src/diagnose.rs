@@ -155,12 +155,13 @@ pub struct Ranked {
     pub parameters: BTreeMap<String, f64>,
     /// Jackknife standard error of each parameter over the folds.
     pub parameter_se: BTreeMap<String, f64>,
-    /// For a parameter the search chooses on a grid (a reflex's delay): the lowest and
-    /// the highest grid value the held-out test cannot tell from the best (a one-sided
-    /// paired t-test at 5 % on the test's folds, `CvFit::settings_kept` in
-    /// `crossval.rs`). A range much wider than the standard error says the session's
-    /// layout does not pin the parameter: the folds agree on a value, but others fit as
-    /// well.
+    /// For a parameter the search chooses on a grid (a reflex's delay): the values
+    /// whose nearest grid value the held-out test cannot tell from the best (a
+    /// one-sided paired t-test at 5 % on the test's folds, `CvFit::settings_kept` in
+    /// `crossval.rs`; the kept grid values widened to the midpoints with their
+    /// neighbours outside). A range much wider than the standard error says the
+    /// session's layout does not pin the parameter: the folds agree on a value, but
+    /// others fit as well. It speaks of the noise, not of a bias every fold shares.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub parameter_range: BTreeMap<String, [f64; 2]>,
     /// The effects already named that this candidate was fitted jointly with and judged
@@ -449,7 +450,9 @@ fn fold_stats(fit: &CvFit, base: &CvFit, base_nrmse: f64) -> (f64, f64, Vec<f64>
 
 /// The range of a searched parameter over the settings of `fit` its folds cannot tell
 /// from the best (`CvFit::settings_kept`, one-sided at 5 % with the folds' degrees of
-/// freedom), keyed by the parameter the setting is: `setting(s)` names it, or, where
+/// freedom), widened to the midpoints with the grid's next values outside it (the values
+/// whose nearest grid value is kept: a parameter between two grid values is in the
+/// range of either), keyed by the parameter the setting is: `setting(s)` names it, or, where
 /// the setting's name is not a parameter's (the delay's `lag_ms` is its `delay_ms`),
 /// the parameter of `parameters_at(s)` equal to the setting's value. Empty where the
 /// setting is no parameter (a friction knee crossed with a choice of velocity is one;
@@ -484,7 +487,18 @@ fn searched_range(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
             (lo.min(v), hi.max(v))
         });
-    out.insert(name, [lo, hi]);
+    let grid: Vec<f64> = (0..fit.held_out.len()).map(|s| setting(s).1).collect();
+    let below = grid
+        .iter()
+        .copied()
+        .filter(|v| *v < lo)
+        .fold(lo, |m, v| if m < lo { m.max(v) } else { v });
+    let above = grid
+        .iter()
+        .copied()
+        .filter(|v| *v > hi)
+        .fold(hi, |m, v| if m > hi { m.min(v) } else { v });
+    out.insert(name, [(lo + below) / 2.0, (hi + above) / 2.0]);
     out
 }
 

@@ -254,21 +254,17 @@ pub fn table(d: &Diagnosis) -> String {
     for c in &d.causes {
         for (k, [lo, hi]) in &c.parameter_range {
             let v = c.parameters.get(k).copied().unwrap_or(f64::NAN);
-            let line = if hi > lo {
-                format!(
-                    "the folds cannot tell {} to {} from it{}",
-                    sig(*lo),
-                    sig(*hi),
-                    // Beyond ±20 % of the value: what a lab comparing subjects needs.
-                    if hi - lo > 0.4 * v.abs() {
-                        " (wider than ±20 % of it: this session does not pin it)"
-                    } else {
-                        ""
-                    }
-                )
-            } else {
-                "the folds tell every other value its search tried from it".to_string()
-            };
+            let line = format!(
+                "the folds cannot tell {} to {} from it{}",
+                sig(*lo),
+                sig(*hi),
+                // Beyond ±20 % of the value: what a lab comparing subjects needs.
+                if hi - lo > 0.4 * v.abs() {
+                    " (wider than ±20 % of it: this session does not pin it)"
+                } else {
+                    ""
+                }
+            );
             let _ = writeln!(out, "range: {}: {k} {}: {line}", c.name, sig(v));
         }
     }
@@ -462,6 +458,7 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
         name,
         value,
         curve,
+        searched_range(&a.diagnosis, c.name()),
     )))
 }
 
@@ -538,7 +535,7 @@ fn heldout_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Dis
 /// residual against the handle's acceleration (its slope is the unlisted mass), for the
 /// others the search of the nonlinear parameter (reflex delay; grip stiffness at the
 /// chosen damping time).
-fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
+fn hand_cause_figure(h: &HandJudgement, hf: &HandFit, d: &Diagnosis) -> Figure {
     let c = hf.candidate.as_ref();
     let fit = &hf.fit;
     if c.kind() == Some(EffectKind::HandleMass) {
@@ -600,17 +597,28 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit) -> Figure {
         name,
         value,
         curve,
+        searched_range(d, c.name()),
     )
 }
 
+/// The searched range of candidate `name`'s ranking row ([`Ranked::parameter_range`]).
+fn searched_range(d: &Diagnosis, name: &str) -> Option<[f64; 2]> {
+    d.ranking
+        .iter()
+        .find(|r| r.name == name)
+        .and_then(|r| r.parameter_range.values().next().copied())
+}
+
 /// The error of a search over a nonlinear parameter against its setting (`curve`), with
-/// the fitted `value` of `name` marked by a vertical bar over the curve's range.
+/// the fitted `value` of `name` marked by a vertical bar over the curve's range, and the
+/// settings the folds cannot tell from the best (`range`) between two thin bars.
 fn search_figure(
     title: String,
     y_desc: &str,
     name: &str,
     value: f64,
     curve: Vec<(f64, f64)>,
+    range: Option<[f64; 2]>,
 ) -> Figure {
     let (y0, y1) = curve
         .iter()
@@ -634,7 +642,21 @@ fn search_figure(
                 style: Style::Bold,
                 rgb: (210, 50, 40),
             },
-        ],
+        ]
+        .into_iter()
+        .chain(range.into_iter().flat_map(|[lo, hi]| {
+            [
+                (format!("the folds cannot tell it from {}", sig(lo)), lo),
+                (format!("… to {}", sig(hi)), hi),
+            ]
+            .map(|(label, x)| Series {
+                label,
+                points: vec![(x, y0), (x, y1)],
+                style: Style::Line,
+                rgb: (235, 140, 20),
+            })
+        }))
+        .collect(),
         bars: Vec::new(),
         hline: None,
     }
@@ -766,7 +788,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
         figs.push((
             "cause.png".into(),
             "What the cause looks like",
-            hand_cause_figure(h, hf),
+            hand_cause_figure(h, hf, d),
         ));
         if let Some(f) = hand_heldout_figure(h, hf, false) {
             figs.push((
