@@ -19,7 +19,8 @@
 //!   asserted in `hidden_delay.rs`.
 //! - `stretch-reflex` on the shared layout (24 pulses of 150 ms) is named in 10 of 10,
 //!   with both parameters within 20 % in 3 (the gain comes out high; see
-//!   `hidden_stretch_reflex_is_named_under_motor_noise`); a session laid out to measure
+//!   `hidden_stretch_reflex_is_named_under_motor_noise`), and its delay's searched range
+//!   says so: wider than ±20 % on all 20 of the sweep's seeds; a session laid out to measure
 //!   a reflex ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N) is what
 //!   `hidden_stretch_reflex_is_found` asserts.
 //!
