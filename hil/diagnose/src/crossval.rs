@@ -71,8 +71,9 @@ impl CvFit {
         (sse / norm).sqrt()
     }
 
-    /// The settings the folds cannot tell from the best one held fixed: `ŝ` is the setting of least summed held-out error, and
-    /// a setting `s` is told apart when the folds agree that it predicts worse, the
+    /// The settings the folds cannot tell from the best one held fixed: `ŝ` is the
+    /// setting of least summed held-out error, and a setting `s` is told apart when the
+    /// folds agree that it predicts worse, the
     /// mean over folds of `sqrt(SSE_k(s) / SSE_k(ŝ)) − 1` more than `t_crit` standard
     /// errors above 0 (a one-sided paired t-test on the folds, which are independent
     /// units however correlated the samples within one are). Empty with a single

@@ -47,7 +47,7 @@
 //! best one ([`Ranked::parameter_range`]: a one-sided paired t-test at 5 % on the folds'
 //! held-out errors, so it holds however the samples within a fold are correlated). The
 //! two differ where the folds agree on a value along a ridge that others lie on too: a
-//! reflex on 150 ms pulses has a delay of 26 ± 2.7 ms whose range is 14–35 ms. The range
+//! reflex on 150 ms pulses has a delay of 26 ± 2.7 ms whose range is 13.5–35.5 ms. The range
 //! speaks of the noise, not of a bias the model shares across folds.
 //!
 //! The experiments behind these choices: `hil/docs/notes/2026-12-03-decision-rule.md`.
