@@ -266,7 +266,7 @@ fn hidden_handle_mass_is_found() {
 /// 150 ms) the gain reaches 50 % on 1 of 20: see
 /// `hidden_stretch_reflex_is_named_under_motor_noise`. The layout pins the delay: the
 /// range of delays its folds cannot tell from the best holds the hidden one and lies
-/// within ±20 % of the found one (35–36 ms for 35 here).
+/// within ±20 % of the found one (34.5–36.5 ms for 35 here).
 #[test]
 fn hidden_stretch_reflex_is_found() {
     let (g, d) = check_design("stretch-reflex", 1000, &Design::reflex_study(), 0.5);
@@ -363,7 +363,7 @@ fn hidden_stretch_reflex_is_named_under_motor_noise() {
     let ratio = product(&d.parameters) / product(&g.hidden.parameters);
     assert!((0.8..=1.5).contains(&ratio), "g δ found / hidden {ratio}");
     // And the diagnosis says so: the delays its folds cannot tell from the best hold
-    // the hidden one and span more than ±20 % of the found one (13–42 ms here).
+    // the hidden one and span more than ±20 % of the found one (12.5–42.5 ms here).
     let (range, found, hidden) = reflex_delay_range(&g, &d);
     assert!(
         (range[0]..=range[1]).contains(&hidden),

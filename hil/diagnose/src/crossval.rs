@@ -80,20 +80,21 @@ impl CvFit {
     /// setting or fewer than two folds.
     #[must_use]
     pub fn settings_kept(&self, t_crit: f64) -> Vec<usize> {
-        let total = |s: &Vec<f64>| s.iter().sum::<f64>();
         let best = self
             .held_out
             .iter()
+            .map(|h| h.iter().sum::<f64>())
             .enumerate()
-            .filter(|(_, h)| total(h).is_finite())
-            .min_by(|a, b| total(a.1).total_cmp(&total(b.1)));
-        let Some(best) = best.filter(|b| self.held_out.len() > 1 && b.1.len() > 1) else {
+            .filter(|(_, total)| total.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(s, _)| &self.held_out[s]);
+        let Some(best) = best.filter(|b| self.held_out.len() > 1 && b.len() > 1) else {
             return Vec::new();
         };
         let kept = self.held_out.iter().enumerate().filter(|(_, h)| {
             let d: Vec<f64> = h
                 .iter()
-                .zip(best.1)
+                .zip(best)
                 .map(|(e, b)| (e / b).sqrt() - 1.0)
                 .collect();
             if d.iter().any(|x| !x.is_finite()) {

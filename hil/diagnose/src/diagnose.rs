@@ -488,16 +488,19 @@ fn searched_range(
             (lo.min(v), hi.max(v))
         });
     let grid: Vec<f64> = (0..fit.held_out.len()).map(|s| setting(s).1).collect();
+    // The next grid values outside the kept ones (none beyond the grid's ends).
     let below = grid
         .iter()
         .copied()
         .filter(|v| *v < lo)
-        .fold(lo, |m, v| if m < lo { m.max(v) } else { v });
+        .reduce(f64::max)
+        .unwrap_or(lo);
     let above = grid
         .iter()
         .copied()
         .filter(|v| *v > hi)
-        .fold(hi, |m, v| if m > hi { m.min(v) } else { v });
+        .reduce(f64::min)
+        .unwrap_or(hi);
     out.insert(name, [(lo + below) / 2.0, (hi + above) / 2.0]);
     out
 }

@@ -458,7 +458,7 @@ fn cause_figure(a: &Analysis, cf: &CandidateFit) -> Result<Option<Figure>, Discr
         name,
         value,
         curve,
-        searched_range(&a.diagnosis, c.name()),
+        ranked_range(&a.diagnosis, c.name()),
     )))
 }
 
@@ -597,12 +597,12 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit, d: &Diagnosis) -> Figure {
         name,
         value,
         curve,
-        searched_range(d, c.name()),
+        ranked_range(d, c.name()),
     )
 }
 
 /// The searched range of candidate `name`'s ranking row ([`Ranked::parameter_range`]).
-fn searched_range(d: &Diagnosis, name: &str) -> Option<[f64; 2]> {
+fn ranked_range(d: &Diagnosis, name: &str) -> Option<[f64; 2]> {
     d.ranking
         .iter()
         .find(|r| r.name == name)
