@@ -406,6 +406,9 @@ pub fn write(
         md.push_str("![detection rate against effect size](detection.png)\n\n");
         files.push(png);
     }
+    if sweep.diagnose && sweep.effect.is_none() {
+        quiet_section(sweep, &t, &mut md);
+    }
     session_section(sweep, &t, &mut md);
     let path = out.join("sweep.md");
     std::fs::write(&path, md).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -543,6 +546,67 @@ fn detection_rows(sweep: &SweepFile, t: &Table<'_>) -> Vec<DetectionRow> {
             }
         })
         .collect()
+}
+
+/// What the diagnosis named in each grid point of a sweep that hides nothing: every
+/// cause it names there is a false alarm, and its rate gets Wilson's 95 % interval.
+/// Runs whose simulation or diagnosis failed are counted apart, not as quiet.
+fn quiet_section(sweep: &SweepFile, t: &Table<'_>, md: &mut String) {
+    let mut groups: Vec<(String, Vec<&Vec<String>>)> = Vec::new();
+    for row in t.rows {
+        let key = series_key(sweep, t, row);
+        match groups.iter_mut().find(|(k, _)| *k == key) {
+            Some((_, rows)) => rows.push(row),
+            None => groups.push((key, vec![row])),
+        }
+    }
+    md.push_str(
+        "## What the diagnosis named (nothing hidden)\n\n\
+         | series | runs | diagnosed | a cause named | 95 % interval | causes | unexplained |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for (key, rows) in &groups {
+        let diagnosed: Vec<&&Vec<String>> = rows
+            .iter()
+            .filter(|r| t.text(r, "error").is_empty() && t.text(r, "diagnose_error").is_empty())
+            .collect();
+        let mut causes: BTreeMap<&str, usize> = BTreeMap::new();
+        for r in &diagnosed {
+            let c = t.text(r, "causes");
+            if !c.is_empty() && c != "none" {
+                *causes.entry(c).or_default() += 1;
+            }
+        }
+        let named: usize = causes.values().sum();
+        let (lo, hi) = wilson(named, diagnosed.len());
+        let which = if causes.is_empty() {
+            "—".to_owned()
+        } else {
+            causes
+                .iter()
+                .map(|(c, n)| format!("{c} ({n})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let unexplained = diagnosed
+            .iter()
+            .filter(|r| t.text(r, "unexplained") == "true")
+            .count();
+        let _ = writeln!(
+            md,
+            "| {key} | {} | {} | {named}/{} | {:.0}–{:.0} % | {which} | {unexplained} |",
+            rows.len(),
+            diagnosed.len(),
+            diagnosed.len(),
+            100.0 * lo,
+            100.0 * hi,
+        );
+    }
+    md.push_str(
+        "\nNothing is hidden, so every cause named is a false alarm; \"unexplained\" counts runs \
+         where structure outside the catalog was reported. Runs that failed (`error`, \
+         `diagnose_error`) are not diagnosed.\n\n",
+    );
 }
 
 fn session_section(sweep: &SweepFile, t: &Table<'_>, md: &mut String) {
@@ -837,6 +901,52 @@ mod tests {
             "{lo} {hi}"
         );
         assert_eq!(wilson(0, 0), (0.0, 1.0));
+    }
+
+    /// A sweep hiding nothing reports what was named as false alarms: of four runs one
+    /// failed to simulate, one named friction and one reported `unexplained`, so 1 of 3
+    /// diagnosed runs named a cause, with Wilson's interval of 1/3 (6–79 %).
+    #[test]
+    fn a_sweep_hiding_nothing_counts_its_false_alarms() {
+        let sweep = SweepFile::from_toml(
+            "name = \"quiet\"\nprotocol = \"reach-perturb\"\nseed = 1\n\
+             [population]\nsubjects = 4\n[measure]\nestimate = false\ndiagnose = true\n",
+            Path::new("quiet.toml"),
+        )
+        .unwrap();
+        let header = super::super::table::header(&sweep);
+        let row = |error: &str, causes: &str, unexplained: &str| {
+            header
+                .iter()
+                .map(|h| match h.as_str() {
+                    "error" => error.to_owned(),
+                    "causes" => causes.to_owned(),
+                    "unexplained" => unexplained.to_owned(),
+                    _ => String::new(),
+                })
+                .collect::<Vec<String>>()
+        };
+        let records = vec![
+            header.clone(),
+            row("", "none", "false"),
+            row("", "rail-friction", "false"),
+            row("", "none", "true"),
+            row("plant: invalid config key", "", ""),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        write(&sweep, &records, dir.path()).unwrap();
+        let md = std::fs::read_to_string(dir.path().join("sweep.md")).unwrap();
+        let (lo, hi) = wilson(1, 3);
+        let line = format!(
+            "| all | 4 | 3 | 1/3 | {:.0}–{:.0} % | rail-friction (1) | 1 |",
+            100.0 * lo,
+            100.0 * hi
+        );
+        assert!(md.contains(&line), "{line}\nnot in\n{md}");
+        assert!(
+            (100.0 * lo).round() == 6.0 && (100.0 * hi).round() == 79.0,
+            "{lo} {hi}"
+        );
     }
 
     fn point(pulses: f64, sd: f64) -> [Precision; 8] {
