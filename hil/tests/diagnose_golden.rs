@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "523702497b52214127dc918b9ba8854b5ba966d4f6f988dcb066f86826a971e3",
+        "322dc3466da69f2c9961ddfdfad97e78196824bce84f0a029c94179f14290182",
     ),
     (
         "example-friction",
-        "17edeac1f773e011209ea76f791e29cda36b6ff8d639b166075535f8693d93e8",
+        "8535f2822f1906871ea6bbdc41e1a907a9713a6cb8ca270c35c7514cba85acad",
     ),
     (
         "example-nuisance",
-        "7ba2bf281c5ffcbae89f23c3d19b9579cb37c6295958f28634b85ce331572408",
+        "9697336fbec06537c397adc2ff879808b0979ca46759a75b47aae334931cdd57",
     ),
     (
         "example-rotation-mass",
-        "2c72c22ff692f82845f73a60b1d4ada9b4eb0c43d23fb14e53473bcc083af5a9",
+        "ebed8781e553ff23c4b8da570371fd29824b9baa0c55cb21a2bac45b7d8660ee",
     ),
 ];
 

@@ -185,8 +185,8 @@ fn diagnose_overlays_the_session_and_the_predicted_command_of_baseline_and_cause
     );
 
     // This session has rail friction: on held-out trials the friction model's prediction
-    // is closer to the command than the nominal balance's (the diagnosis's held-out gain,
-    // at least the 10 % it needs to name a cause).
+    // is closer to the command than the nominal balance's, by at least a tenth (the
+    // friction's held-out gain is far above that on this session).
     let u = scalars(&chunks, &measured);
     let rms = |pred: &[f64]| {
         (u.iter()

@@ -12,7 +12,7 @@
 //! and the balance recovers them almost exactly); for `none`, that no cause is named.
 //! Two exceptions, each measured on the sweep's seeds 1000–1009:
 //!
-//! - `actuation-delay` is held to the decision's own 10 % floor: the current-loop
+//! - `actuation-delay` is held to a held-out gain of 10 %: the current-loop
 //!   noise is a floor no plant model removes, and a 0.75–1.5 ms delay explains
 //!   0.12–0.42 of the cart balance's residual above it (its delay is found within 20 %
 //!   in 10 of 10). What the delay model removes of the excess over that floor is
@@ -234,7 +234,7 @@ fn recording_rates_from_500_hz_to_4_khz_give_the_same_answer() {
     }
 }
 
-/// Held to the decision's 10 % floor, not 50 %: see the module docs (the current-loop
+/// Held to a held-out gain of 10 %, not 50 %: see the module docs (the current-loop
 /// noise sets the cart balance's floor).
 #[test]
 fn hidden_actuation_delay_is_found() {

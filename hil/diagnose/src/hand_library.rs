@@ -23,7 +23,7 @@
 //! fitted on; the odd part of a cubic of a response is, to first order, the cubic of
 //! its odd part.
 //!
-//! A term is judged like a candidate (the t-test on the repetitions, the 10 % floor on
+//! A term is judged like a candidate (the t-test on the repetitions, the gain floor on
 //! its held-out gain, not at the edge of its grid) and must make at least
 //! [`super::decide::FORCE_RESOLUTION_N`] of force somewhere in the responses; terms
 //! enter one at a time, at most [`MAX_HAND_TERMS`]. What passes is reported as the hand

@@ -13,9 +13,12 @@ use rigtwin_diagnose::{DiagnoseOptions, ExtendedModel, diagnose, table, write_re
 /// m·a = u(t − τ) + F + effect (needs cmd_fx_n, cmd_fy_n), and the human-side ones
 /// (grip-compliance, handle-mass, stretch-reflex) to the hand balance of the force-pulse
 /// responses (needs ≥ 8 perturbed and 2 unperturbed trials), on training folds; judges
-/// each on held-out folds against its balance's nominal model, and names the cause only
-/// when its gain is beyond chance (fold t-test) and material (≥ 10 %), a plant-side one
-/// first. Writes diagnosis.md with PNG figures into <session>/diagnosis (or --report-dir).
+/// each on held-out folds against its balance's nominal model, and names every cause
+/// whose gain is beyond chance (fold t-test) and at least --min-gain, whose parameters
+/// are material in physical units and inside their search range, and whose binned
+/// evidence follows its law; on each balance effects are selected forward, each judged
+/// given those named before it, and what the catalog lacks is reported as unexplained.
+/// Writes diagnosis.md with PNG figures into <session>/diagnosis (or --report-dir).
 #[derive(Debug, Clone, clap::Args)]
 #[command(after_help = "\
 Examples:
@@ -52,7 +55,7 @@ pub struct Args {
     #[arg(long, default_value_t = 0.05)]
     pub alpha: f64,
     /// Smallest held-out gain that names a cause (fraction).
-    #[arg(long, default_value_t = 0.10)]
+    #[arg(long, default_value_t = 0.03)]
     pub min_gain: f64,
     /// Also send the session, and for every trial the motor command the balance predicts
     /// with the baseline and each candidate fitted without it (`predicted/…`), to the rerun
