@@ -476,6 +476,23 @@ struct DetectionRow {
     unexplained: usize,
 }
 
+/// A row's grid point as `key = value` over every grid key (the session layout's too),
+/// or `all` for a sweep without a grid: the series of the detection and false-alarm
+/// tables.
+fn grid_series(sweep: &SweepFile, t: &Table<'_>, row: &[String]) -> String {
+    let series = sweep
+        .grid
+        .iter()
+        .map(|(k, _)| format!("{k} = {}", t.text(row, k)))
+        .collect::<Vec<_>>()
+        .join(", ");
+    if series.is_empty() {
+        "all".to_owned()
+    } else {
+        series
+    }
+}
+
 fn detection_rows(sweep: &SweepFile, t: &Table<'_>) -> Vec<DetectionRow> {
     let Some(e) = &sweep.effect else {
         return Vec::new();
@@ -484,17 +501,7 @@ fn detection_rows(sweep: &SweepFile, t: &Table<'_>) -> Vec<DetectionRow> {
     let mut groups: BTreeMap<(String, usize), Vec<&Vec<String>>> = BTreeMap::new();
     let mut order: Vec<(String, usize)> = Vec::new();
     for row in t.rows {
-        let series = sweep
-            .grid
-            .iter()
-            .map(|(k, _)| format!("{k} = {}", t.text(row, k)))
-            .collect::<Vec<_>>()
-            .join(", ");
-        let series = if series.is_empty() {
-            "all".to_owned()
-        } else {
-            series
-        };
+        let series = grid_series(sweep, t, row);
         let size = e
             .sizes
             .iter()
@@ -554,7 +561,7 @@ fn detection_rows(sweep: &SweepFile, t: &Table<'_>) -> Vec<DetectionRow> {
 fn quiet_section(sweep: &SweepFile, t: &Table<'_>, md: &mut String) {
     let mut groups: Vec<(String, Vec<&Vec<String>>)> = Vec::new();
     for row in t.rows {
-        let key = series_key(sweep, t, row);
+        let key = grid_series(sweep, t, row);
         match groups.iter_mut().find(|(k, _)| *k == key) {
             Some((_, rows)) => rows.push(row),
             None => groups.push((key, vec![row])),
