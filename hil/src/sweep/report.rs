@@ -645,8 +645,11 @@ fn session_section(sweep: &SweepFile, t: &Table<'_>, md: &mut String) {
             .map(|(_, v)| super::table::cell(v))
             .collect::<Vec<_>>()
             .join(", ");
+        // A failed run has no session: its zeros would pull the mean length down and
+        // the margin to the wall to 0.
         let col = |c: &str| {
             rows.iter()
+                .filter(|r| t.text(r, "error").is_empty())
                 .filter_map(|r| t.num(r, c))
                 .collect::<Vec<f64>>()
         };
@@ -912,7 +915,8 @@ mod tests {
 
     /// A sweep hiding nothing reports what was named as false alarms: of four runs one
     /// failed to simulate, one named friction and one reported `unexplained`, so 1 of 3
-    /// diagnosed runs named a cause, with Wilson's interval of 1/3 (6–79 %).
+    /// diagnosed runs named a cause, with Wilson's interval of 1/3 (6–79 %); the failed
+    /// run's zeros stay out of the session length and the margin to the wall.
     #[test]
     fn a_sweep_hiding_nothing_counts_its_false_alarms() {
         let sweep = SweepFile::from_toml(
@@ -923,12 +927,17 @@ mod tests {
         .unwrap();
         let header = super::super::table::header(&sweep);
         let row = |error: &str, causes: &str, unexplained: &str| {
+            let ran = error.is_empty();
             header
                 .iter()
                 .map(|h| match h.as_str() {
                     "error" => error.to_owned(),
                     "causes" => causes.to_owned(),
                     "unexplained" => unexplained.to_owned(),
+                    "point" | "trips" => "0".to_owned(),
+                    "session_length_s" => if ran { "100" } else { "0" }.to_owned(),
+                    "wall_margin_m" => if ran { "0.02" } else { "0" }.to_owned(),
+                    "peak_command_n" => if ran { "40" } else { "0" }.to_owned(),
                     _ => String::new(),
                 })
                 .collect::<Vec<String>>()
@@ -950,6 +959,10 @@ mod tests {
             100.0 * hi
         );
         assert!(md.contains(&line), "{line}\nnot in\n{md}");
+        // The failed run's zeros are not in the session table: the three sessions ran
+        // 100 s and came within 20 mm of the wall at the closest.
+        let session = "| 0 | — | 4 | 100 | 20 | 40 | 0 | 1 |";
+        assert!(md.contains(session), "{session}\nnot in\n{md}");
         assert!(
             (100.0 * lo).round() == 6.0 && (100.0 * hi).round() == 79.0,
             "{lo} {hi}"
