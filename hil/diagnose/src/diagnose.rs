@@ -36,8 +36,8 @@
 //! is judged in physical units ([`super::decide`]), not by this share: the residual also
 //! holds the rig's and the subject's noise, which no model reproduces sample by sample,
 //! and on a noisier rig the same material effect explains a smaller share of it (a 1 ms
-//! drive delay beside 0.2–0.6 N of current-loop noise gains 5.6–23 % at t 9–32; the
-//! 10 % floor used until 2026-12-04 named 3 of 12).
+//! drive delay beside 0.2–0.6 N of current-loop noise gains 5–23 % at t 9–32; the
+//! measurements: `hil/docs/notes/2026-12-03-decision-rule.md`).
 //!
 //! α is 0.05 family-wise by default. What guards against false alarms in practice are
 //! the physical checks: on sessions hiding nothing, candidates pass the t-test with
