@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use super::error::DiscrepancyError;
 use super::gram::Gram;
+use super::stats::mean_sd;
 
 /// Assignment of trials to folds.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -100,11 +101,9 @@ impl CvFit {
             if d.iter().any(|x| !x.is_finite()) {
                 return false;
             }
-            let n = d.len() as f64;
-            let mean = d.iter().sum::<f64>() / n;
-            let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+            let (mean, sd) = mean_sd(&d);
             // Equal errors in every fold (the setting itself): kept.
-            mean <= 0.0 || mean <= t_crit * (var / n).sqrt()
+            mean <= 0.0 || mean <= t_crit * sd / (d.len() as f64).sqrt()
         });
         kept.map(|(s, _)| s).collect()
     }
