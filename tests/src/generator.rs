@@ -324,6 +324,14 @@ impl Design {
         rate_hz: 1000,
     };
 
+    /// The shared layout on the ideal rig and without the arm's motor noise: what is
+    /// left is the balance's own structural floor.
+    pub const QUIET: Design = Design {
+        motor_noise: false,
+        nuisance: None,
+        ..Design::SHARED
+    };
+
     /// `repetitions` pulses per angle in a session of the shared proportion (a quarter
     /// of the reaches unperturbed): 9 gives 72 pulses in 96 reaches.
     #[must_use]

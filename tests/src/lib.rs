@@ -9,6 +9,8 @@ use std::sync::atomic::AtomicBool;
 
 use rigtwin::protocol::Protocol;
 use rigtwin::rehearse::{self, Options, Rehearsal, RehearseError};
+use rigtwin::session::Session;
+use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose};
 
 /// Rehearses `protocol` for one subject with `seed` into `out` on `jobs` threads,
 /// silently and without a way to cancel, as the end-to-end tests need it.
@@ -31,6 +33,25 @@ pub fn rehearse_one(
         max_trials,
     };
     rehearse::rehearse(protocol, &options, &|_| {}, &AtomicBool::new(false))
+}
+
+/// Generates a session hiding `effect` laid out by `design` into `out`
+/// ([`generator::generate_design`]) and diagnoses it with the default options, as the
+/// hidden-effect tests judge one.
+///
+/// # Errors
+/// An unknown effect, the runtime's error, an unreadable session or the diagnosis's
+/// error.
+pub fn generate_and_diagnose(
+    effect: &str,
+    seed: u64,
+    design: &generator::Design,
+    out: &Path,
+) -> Result<(generator::Generated, Diagnosis), Box<dyn std::error::Error + Send + Sync>> {
+    let g = generator::generate_design(effect, seed, design, out)?;
+    let s = Session::read(&g.dir)?;
+    let d = diagnose(&s, &DiagnoseOptions::default())?.diagnosis;
+    Ok((g, d))
 }
 
 /// Every file under `dir`, by `/`-separated path relative to it, with its bytes.

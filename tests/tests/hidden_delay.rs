@@ -20,7 +20,8 @@ use std::path::{Path, PathBuf};
 
 use rigtwin::session::Session;
 use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose};
-use rigtwin_tests::generator::{Design, Hidden, generate, generate_design};
+use rigtwin_tests::generate_and_diagnose;
+use rigtwin_tests::generator::{Design, Hidden, generate};
 
 /// Reaches per session: the shared sessions' 32.
 const TRIALS: usize = 32;
@@ -110,16 +111,10 @@ fn hidden_delay_removes_the_excess_over_the_floor() {
 /// 0.025–0.125 ms longer than the one hidden.
 #[test]
 fn the_found_delay_is_the_hidden_one_plus_the_rigs_own_lag() {
-    let quiet = Design {
-        motor_noise: false,
-        nuisance: None,
-        ..Design::SHARED
-    };
     let diagnosed = |effect: &str| {
         let tmp = tempfile::tempdir().unwrap();
-        let g = generate_design(effect, 1003, &quiet, &tmp.path().join("out")).unwrap();
-        let s = Session::read(&g.dir).unwrap();
-        let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+        let (g, d) =
+            generate_and_diagnose(effect, 1003, &Design::QUIET, &tmp.path().join("out")).unwrap();
         (g.hidden, d)
     };
     let (_, none) = diagnosed("none");

@@ -33,16 +33,9 @@
 
 use rigtwin::session::Session;
 use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, write_report};
+use rigtwin_tests::generate_and_diagnose;
 use rigtwin_tests::generator::{
     Design, EFFECTS, Generated, OUT_OF_CATALOG, PAIRS, generate_design, parse_pulse,
-};
-
-/// The shared layout on the ideal rig and without the arm's motor noise: what is left
-/// is the balance's own structural floor.
-const QUIET: Design = Design {
-    motor_noise: false,
-    nuisance: None,
-    ..Design::SHARED
 };
 
 fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
@@ -51,10 +44,7 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 
 fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis) {
     let tmp = tempfile::tempdir().unwrap();
-    let g = generate_design(effect, seed, design, &tmp.path().join("out")).unwrap();
-    let s = Session::read(&g.dir).unwrap();
-    let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
-    (g, d)
+    generate_and_diagnose(effect, seed, design, &tmp.path().join("out")).unwrap()
 }
 
 fn check(effect: &str, seed: u64) -> (Generated, Diagnosis) {
@@ -380,11 +370,7 @@ fn hidden_stretch_reflex_is_named_under_motor_noise() {
 /// structural error of the baseline would show as a cause.
 #[test]
 fn noise_free_reflex_is_found_and_nothing_else() {
-    let tmp = tempfile::tempdir().unwrap();
-    let g = generate_design("stretch-reflex", 2, &QUIET, &tmp.path().join("r")).unwrap();
-    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (g, d) = run_design("stretch-reflex", 2, &Design::QUIET);
     eprintln!(
         "hidden {:?}, found {} {:?} gain {:?}",
         g.hidden.parameters, d.cause, d.parameters, d.gain
@@ -434,10 +420,7 @@ fn noise_free_reflex_is_found_and_nothing_else() {
         d.parameters["endpoint_damping_yy_n_s_per_m"],
     );
     assert!(xx > 0.0 && yy > 0.0 && xx * yy > xy * xy, "{xx} {xy} {yy}");
-    let g = generate_design("none", 2, &QUIET, &tmp.path().join("n")).unwrap();
-    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (_, d) = run_design("none", 2, &Design::QUIET);
     assert_eq!(d.cause, "none", "{:?}", d.parameters);
 }
 
@@ -843,15 +826,14 @@ fn range_covers(
     ranges: &std::collections::BTreeMap<String, [f64; 2]>,
     hidden: &std::collections::BTreeMap<String, f64>,
 ) -> Option<bool> {
-    let mut any = None;
-    for (k, [lo, hi]) in ranges {
-        if let Some(t) = hidden.get(k) {
+    ranges
+        .iter()
+        .filter_map(|(k, [lo, hi])| {
+            let t = hidden.get(k)?;
             let pad = 0.01 * t.abs();
-            let inside = (lo - pad..=hi + pad).contains(t);
-            any = Some(any.unwrap_or(true) && inside);
-        }
-    }
-    any
+            Some((lo - pad..=hi + pad).contains(t))
+        })
+        .reduce(|a, b| a && b)
 }
 
 #[test]
