@@ -1165,7 +1165,7 @@ mod tests {
         let n = onset + (HAND_WINDOW_S * rate).round() as usize + 1;
         let mut r = response(vec![0.0; n], rate);
         r.onset = onset;
-        // x = c t² e^(−t/T) from the onset: at rest there, then out (peak at 2T) and back.
+        // x = c t² e^(−t/T) from the onset: at rest there, out and back within the window.
         let swing = [(4e-3, 0.1), (-3e-3, 0.15)];
         for (axis, (c, tau)) in swing.into_iter().enumerate() {
             let t = |j: usize| (j as f64 - onset as f64) / rate;
