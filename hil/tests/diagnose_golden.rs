@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "cb5a156e724ff47c8ff72feb94f9395ece45fb261aa4c5eef4a5e3b6a13151bf",
+        "322dc3466da69f2c9961ddfdfad97e78196824bce84f0a029c94179f14290182",
     ),
     (
         "example-friction",
-        "5be550c723d20f7a31e4ed47208cc039eb21659399a031d8dc124a239048e50d",
+        "8535f2822f1906871ea6bbdc41e1a907a9713a6cb8ca270c35c7514cba85acad",
     ),
     (
         "example-nuisance",
-        "26954f892a950780e1341057924da62aeb7d8b91b2faabbdd15b701970501fee",
+        "9697336fbec06537c397adc2ff879808b0979ca46759a75b47aae334931cdd57",
     ),
     (
         "example-rotation-mass",
-        "c1d5a2d77a814c9cb924f39c75450fa2b06a173bbc06ba95d857956f40bcc238",
+        "ebed8781e553ff23c4b8da570371fd29824b9baa0c55cb21a2bac45b7d8660ee",
     ),
 ];
 

@@ -25,9 +25,7 @@
 //! candidate (like the cart balance's latency). `x_h` is the hand, equal to the handle
 //! for a rigid grip. Every response also carries a constant force per axis, fitted out
 //! and never named ([`RESPONSE_OFFSET_COLUMNS`]): what the trial and its references
-//! differ by over the window that is not the response. The rows begin
-//! [`super::hand_signals::HAND_QUIET_S`] before the onset, where the balance holds with
-//! no response yet, so that those rows pin the constant. The candidates, each nested on
+//! differ by over the window that is not the response. The candidates, each nested on
 //! this baseline:
 //!
 //! - `handle-mass`: `+ m_extra Δa` (isotropic): mass above the sensor that the manifest's
@@ -103,12 +101,6 @@ pub const FEEDBACK_DELAYS_MS: [f64; 1] = [60.0];
 /// latency reflexes of the upper limb appear at 20–50 ms); a shorter delay fits a
 /// near-instantaneous term that mimics inertia, not a reflex.
 pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
-// The earliest row, `HAND_QUIET_S` before the onset, reads the longest catalog delay
-// (the feedback's or a reflex's) from measured history, not from the zeros before it.
-const _: () = assert!(
-    super::hand_signals::HAND_QUIET_S * 1e3 + FEEDBACK_DELAYS_MS[0].max(REFLEX_DELAY_MS.1)
-        <= super::hand_signals::HAND_LEAD_S * 1e3
-);
 /// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 41 values (~12 % apart).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 41);
 /// Grip time constants `b/k` searched, s: 1–10 ms about 1.5× apart (a grasp through
@@ -518,9 +510,7 @@ pub fn whitened_rows(
 /// never named. It takes up what a perturbed trial and its unperturbed references differ
 /// by that is not the response and holds over the 0.3 s window: the force sensor's
 /// offset drifting between the trials, the subject's steady push toward an end point a
-/// few millimetres from the references'. The quiet rows before the onset
-/// ([`super::hand_signals::HAND_QUIET_S`]) pin it, so that it does not take up the slow
-/// part of the response. There is no slope per axis (a reach faster or
+/// few millimetres from the references'. There is no slope per axis (a reach faster or
 /// slower than its references): it takes up part of an extra mass's response
 /// (`hil/docs/notes/2026-12-02-hand-balance.md`). The constants are carried as columns,
 /// not as [`super::gram::Intercepts`], because the weighting filters them in time and
@@ -1146,81 +1136,6 @@ mod tests {
         r.s = vec![sh; n];
         r.rows = (100..n).collect();
         r
-    }
-
-    /// The quiet rows before the onset pin the constant force every response carries
-    /// ([`RESPONSE_OFFSET_COLUMNS`]), so that it no longer takes up part of the response.
-    /// On a pulse's response (nothing before the onset, then a swing out and back along
-    /// each axis), the information on a reflex's gain (the inverse of its diagonal entry
-    /// of `(XᵀX)⁻¹`, whitened as the balance weighs its rows) is compared with what it
-    /// would be if the constant were known. The swing is slow (time constants 0.10 and
-    /// 0.15 s, as the arm's answer to a 150 ms pulse), so the constant is nearly collinear
-    /// with it over the window.
-    #[test]
-    fn quiet_rows_before_the_onset_pin_the_responses_constant() {
-        use crate::hand_signals::{HAND_LEAD_S, HAND_QUIET_S, HAND_WINDOW_S};
-        use nalgebra::DMatrix;
-        let rate = 1000.0;
-        let onset = (HAND_LEAD_S * rate).round() as usize;
-        let n = onset + (HAND_WINDOW_S * rate).round() as usize + 1;
-        let mut r = response(vec![0.0; n], rate);
-        r.onset = onset;
-        // x = c t² e^(−t/T) from the onset: at rest there, out and back within the window.
-        let swing = [(4e-3, 0.1), (-3e-3, 0.15)];
-        for (axis, (c, tau)) in swing.into_iter().enumerate() {
-            let t = |j: usize| (j as f64 - onset as f64) / rate;
-            let e = |j: usize| if j < onset { 0.0 } else { (-t(j) / tau).exp() };
-            r.dx[axis] = (0..n).map(|j| c * t(j).powi(2) * e(j)).collect();
-            r.dv[axis] = (0..n)
-                .map(|j| c * (2.0 * t(j) - t(j).powi(2) / tau) * e(j))
-                .collect();
-            r.da[axis] = (0..n)
-                .map(|j| c * (2.0 - 4.0 * t(j) / tau + (t(j) / tau).powi(2)) * e(j))
-                .collect();
-        }
-        r.m_arm = vec![Matrix2::new(1.8, 0.3, 0.3, 1.1); n];
-        r.s = vec![Matrix2::new(0.07, 0.02, 0.02, 0.05); n];
-        let (fb, setting) = (0.06, 15);
-        let gain = StretchReflex.columns() - 1;
-        let w = Whitening::in_time();
-        let information = |g: &Gram| {
-            let inv = DMatrix::from_row_slice(g.p, g.p, &g.xtx)
-                .try_inverse()
-                .expect("the reflex's columns are independent on this response");
-            1.0 / inv[(gain, gain)]
-        };
-        let mut rows_from = |first: usize| {
-            r.rows = (first..n).collect();
-            let mut known = Gram::new(StretchReflex.columns());
-            whitened_rows(&StretchReflex, &r, setting, fb, &w, &mut |x, y, nrm| {
-                known.push(x, y, nrm);
-            });
-            let fitted = hand_gram(&StretchReflex, &r, setting, fb, &w);
-            (information(&known), information(&fitted))
-        };
-        let (known, window) = rows_from(onset);
-        let quiet = (HAND_QUIET_S * rate).round() as usize;
-        let (known_q, with_quiet) = rows_from(onset - quiet);
-        // Rows before the onset carry nothing of the response, so with the constant
-        // known they add no information on the gain.
-        assert!(
-            (known_q - known).abs() <= 1e-9 * known,
-            "{known_q} vs {known}"
-        );
-        // Fitted on the window alone, the constant takes up a tenth of what the response
-        // tells of the gain (0.889 of it kept on this response)...
-        assert!(
-            window < 0.95 * known,
-            "window alone keeps {}",
-            window / known
-        );
-        // ...and with the quiet rows, where the constant is all there is, it takes up
-        // almost nothing (1 − 1e-5 kept).
-        assert!(
-            with_quiet > 0.999 * known,
-            "with the quiet rows {} is kept",
-            with_quiet / known
-        );
     }
 
     /// A response built exactly by the baseline's law, with a non-symmetric `D` and `K`

@@ -37,10 +37,7 @@
 //! lengths and shoulder.
 //!
 //! The window is [`HAND_WINDOW_S`] long from the onset, with [`HAND_LEAD_S`] of history
-//! before it for the delayed terms. The balance's rows begin [`HAND_QUIET_S`] before the
-//! onset: there the response is nothing but what the trial and its references differ
-//! by, so those rows pin the constant force every response carries (the hand balance's
-//! `RESPONSE_OFFSET_COLUMNS`) without that constant taking up part of the response.
+//! before it for the delayed terms.
 
 use nalgebra::{Matrix2, Vector2};
 use rigtwin_arm::impedance::{endpoint_inertia, joint_to_endpoint};
@@ -66,16 +63,6 @@ pub const HAND_WINDOW_S: f64 = 0.3;
 /// History kept before the onset for the delayed terms, s (the longest feedback delay
 /// of the search plus margin).
 pub const HAND_LEAD_S: f64 = 0.13;
-/// Rows of the balance before the onset, s: the quiet stretch where nothing has been
-/// pushed yet and the balance holds all the same (the reach's own variation about its
-/// references, and a constant the trial differs by). Fitted on the window alone, that
-/// constant is nearly collinear with the slow part of the response over 0.3 s and takes
-/// some of it up (a reflex's delay and gain scatter more); the quiet rows pin it. 50 ms:
-/// the catalog's delayed terms (the 60 ms feedback, reflexes of up to 50 ms) still read
-/// measured history from the earliest row (`HAND_LEAD_S` − 50 ms = 80 ms), and further
-/// from the onset, where the references are aligned, the reach's own variation grows
-/// (`hil/docs/notes/2026-12-04-quiet-rows.md`).
-pub const HAND_QUIET_S: f64 = 0.05;
 
 /// The arm's known geometry and inertia at the rig.
 #[derive(Debug, Clone)]
@@ -169,8 +156,7 @@ pub struct HandResponse {
     pub m_arm: Vec<Matrix2<f64>>,
     /// Feedback shape `S` at each sample, dimensionless.
     pub s: Vec<Matrix2<f64>>,
-    /// Evaluated local indices: from [`HAND_QUIET_S`] before the onset to the end of
-    /// the window.
+    /// Evaluated local indices (from the onset to the end of the window).
     pub rows: Vec<usize>,
     /// Unperturbed trials in the reference (summed over the averaged trials).
     pub references: usize,
@@ -536,7 +522,6 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
         .collect::<Result<_, _>>()?;
     let damping = session.manifest.device.damping_n_s_per_m;
     let lead = (HAND_LEAD_S * rate).ceil() as usize;
-    let quiet = ((HAND_QUIET_S * rate).round() as usize).min(lead);
     let len = (HAND_WINDOW_S * rate).round() as usize + 1;
     let decim = ((rate / EVALUATION_RATE_HZ).round() as usize).max(1);
     let half = window_for_rate(rate) / 2;
@@ -617,7 +602,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 dfd: [fdx, fdy],
                 m_arm,
                 s,
-                rows: (lead - quiet..n).step_by(decim).collect(),
+                rows: (lead..n).step_by(decim).collect(),
                 references: aligned.len(),
                 trials: vec![e.id],
             }))

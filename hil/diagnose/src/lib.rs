@@ -71,7 +71,7 @@ pub use hand::{
     RESPONSE_OFFSET_COLUMNS, ReplicateTest, StretchReflex, hand_fit_rows, hand_grams, judge_hand,
 };
 pub use hand_signals::{
-    HAND_LEAD_S, HAND_QUIET_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, hand_responses,
+    HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, hand_responses,
 };
 pub use joint::{Joint, Member, MemberParameters};
 pub use model::ExtendedModel;

@@ -865,8 +865,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
          `M_arm` and feedback shape `S` known from the segment lengths (muscles without tone at half weight in \
          `S`: they answer only their stretch) and `D`, `K` full 2×2 matrices, over {} s \
-         after the onset and the {:.0} ms before it (where nothing has been pushed yet, so that those rows pin the \
-         constant force every response carries, fitted and never named). With opposite pulse directions in the session it is fitted on the odd part of each \
+         after the onset. With opposite pulse directions in the session it is fitted on the odd part of each \
          pair's mean responses (half the difference of the responses to θ and θ + 180°, which drops the terms \
          even in the pulse and the reference's noise), one pair held out at a time, and tested on the single \
          repetitions of the pairs, one held out at a time; otherwise on responses averaged by direction, in \
@@ -877,8 +876,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          there), or, without repetitions, the baseline's residual; its NRMSEs and gains are those of the weighted \
          force.",
         d.folds,
-        super::hand_signals::HAND_WINDOW_S,
-        super::hand_signals::HAND_QUIET_S * 1e3
+        super::hand_signals::HAND_WINDOW_S
     );
     let md_path = dir.join("diagnosis.md");
     std::fs::write(&md_path, md).map_err(|e| werr(&md_path, e))?;
