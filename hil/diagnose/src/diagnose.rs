@@ -2105,8 +2105,11 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
             if !lead.significant {
                 return Ok(None);
             }
-            let mut chosen = joint.fixed.clone();
-            chosen.push((joint.next.clone(), fit.fit.setting));
+            // In the causes' order: the joint's new member is the first cause, the
+            // member it was fitted given is the second (a later round refits the causes
+            // from the members by position).
+            let mut chosen = vec![(joint.next.clone(), fit.fit.setting)];
+            chosen.extend(joint.fixed.iter().cloned());
             Ok(Some(MaskedPair {
                 causes: vec![Cause::of(&first)?, Cause::of(&second)?],
                 chosen,
