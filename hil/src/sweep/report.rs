@@ -145,6 +145,11 @@ fn series_key(sweep: &SweepFile, t: &Table<'_>, row: &[String]) -> String {
     if let Some(e) = &sweep.effect {
         parts.push(format!("{} = {}", e.key, t.text(row, &e.key)));
     }
+    series_label(&parts)
+}
+
+/// A series' label from its `key = value` parts, or `all` for a sweep without any.
+fn series_label(parts: &[String]) -> String {
     if parts.is_empty() {
         "all".to_owned()
     } else {
@@ -480,17 +485,12 @@ struct DetectionRow {
 /// or `all` for a sweep without a grid: the series of the detection and false-alarm
 /// tables.
 fn grid_series(sweep: &SweepFile, t: &Table<'_>, row: &[String]) -> String {
-    let series = sweep
+    let parts: Vec<String> = sweep
         .grid
         .iter()
         .map(|(k, _)| format!("{k} = {}", t.text(row, k)))
-        .collect::<Vec<_>>()
-        .join(", ");
-    if series.is_empty() {
-        "all".to_owned()
-    } else {
-        series
-    }
+        .collect();
+    series_label(&parts)
 }
 
 fn detection_rows(sweep: &SweepFile, t: &Table<'_>) -> Vec<DetectionRow> {
