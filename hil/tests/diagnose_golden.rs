@@ -29,7 +29,7 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-rotation-mass",
-        "ebed8781e553ff23c4b8da570371fd29824b9baa0c55cb21a2bac45b7d8660ee",
+        "bafa0617edc092ee718f44c09adf282f401d47a29a56f986f581c0d2316eb9ea",
     ),
 ];
 

@@ -103,12 +103,15 @@ pub const FEEDBACK_DELAYS_MS: [f64; 1] = [60.0];
 pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
 /// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 41 values (~12 % apart).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 41);
-/// Grip time constants `b/k` searched, s: 1–10 ms about 1.5× apart (a grasp through
-/// skin and soft tissue: a few kN/m with tens of N s/m). On a reflex study's brief
-/// pulses the grip's damping shows, and a coarser grid (1, 2.5, 5, 10 ms) left a misfit
-/// that the hand's library then reported as a late feedback or a saturating damping on
-/// 8 of 20 sessions hiding a grip alone (`hil/docs/notes/2026-12-04-hand-library.md`).
-pub const GRIP_TIME_S: [f64; 7] = [1e-3, 1.5e-3, 2e-3, 3e-3, 4e-3, 6e-3, 1e-2];
+/// Grip time constants `b/k` searched, s: `(first, last, count)`, a log grid from 1 to
+/// 10 ms, 19 values 13.6 % apart (a grasp through skin and soft tissue: a few kN/m with
+/// tens of N s/m). On a reflex study's brief pulses the grip's damping shows, and the
+/// misfit a coarser grid leaves is structure the hand's library reports and a later
+/// round's candidate takes up: with 7 values about 1.5× apart, 4 of 12 sessions hiding a
+/// grip alone reported a velocity-squared damping as `hand_unexplained`, and 3 of 12
+/// hiding a grip and a heavier handle named a stretch reflex as a third cause (none and 1
+/// with this grid; `hil/docs/notes/2026-12-04-grip-time-grid.md`).
+pub const GRIP_TIME_S: (f64, f64, usize) = (1e-3, 1e-2, 19);
 /// Correlation time of the residual the hand balance whitens in time, s ([`Whitening`]).
 /// The residual of a correct model is the arm's motor noise, a leaky Brownian motion in
 /// the activations (000_* section 4; the project's arm uses τ = 50 ms), and the
@@ -806,11 +809,17 @@ impl HandCandidate for StretchReflex {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct GripCompliance;
 
+/// The grip's stiffness (N/m) and time constant (s) at setting `s`: the stiffness's
+/// index times the time constants' count plus the time constant's index, both on the log
+/// grids [`GRIP_STIFFNESS_N_PER_M`] and [`GRIP_TIME_S`].
 pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
-    let (lo, hi, n) = GRIP_STIFFNESS_N_PER_M;
-    let (ki, ti) = (s / GRIP_TIME_S.len(), s % GRIP_TIME_S.len());
-    let k = lo * (hi / lo).powf(ki as f64 / (n - 1) as f64);
-    (k, GRIP_TIME_S[ti])
+    let on_log_grid =
+        |(lo, hi, n): (f64, f64, usize), i: usize| lo * (hi / lo).powf(i as f64 / (n - 1) as f64);
+    let times = GRIP_TIME_S.2;
+    (
+        on_log_grid(GRIP_STIFFNESS_N_PER_M, s / times),
+        on_log_grid(GRIP_TIME_S, s % times),
+    )
 }
 
 impl HandCandidate for GripCompliance {
@@ -818,7 +827,7 @@ impl HandCandidate for GripCompliance {
         Some(EffectKind::GripCompliance)
     }
     fn settings(&self) -> usize {
-        GRIP_STIFFNESS_N_PER_M.2 * GRIP_TIME_S.len()
+        GRIP_STIFFNESS_N_PER_M.2 * GRIP_TIME_S.2
     }
     fn setting(&self, s: usize) -> (&'static str, f64) {
         ("stiffness_n_per_m", grip_setting(s).0)
@@ -1443,7 +1452,7 @@ mod tests {
         assert!(moved > 1e-7, "the load moved the hand by at most {moved} m");
     }
 
-    /// A response made exactly of a grip (3155 N/m, τ 5 ms: a point of the grid) and a
+    /// A response made exactly of a grip (3155 N/m, τ 5.3 ms: a point of the grid) and a
     /// 0.43 kg handle mass on the handle's side of it: the hand moves by two
     /// incommensurate motions per axis, the arm's law gives the force on it, the handle
     /// trails it through the spring (the same filter [`Kin::grip`] integrates), and the
@@ -1459,7 +1468,7 @@ mod tests {
         let (n, rate, m_arm) = (hand.df[0].len(), hand.rate_hz, hand.m_arm[0]);
         let d = Matrix2::new(12.0, -3.0, 5.0, 9.0);
         let k = Matrix2::new(420.0, 60.0, -140.0, 310.0);
-        let (setting, mass) = (16 * GRIP_TIME_S.len() + 2, 0.43);
+        let (setting, mass) = (16 * GRIP_TIME_S.2 + 13, 0.43);
         let (k_grip, tau) = grip_setting(setting);
         // The hand's jerk, by central differences of its acceleration, for the force's rate.
         let jerk = |a: &[f64], i: usize| {

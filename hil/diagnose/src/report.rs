@@ -579,7 +579,7 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit, d: &Diagnosis) -> Figure {
     }
     let norm: f64 = fit.folds.iter().map(|f| f.test_norm_sq).sum();
     let stride = if c.kind() == Some(EffectKind::GripCompliance) {
-        GRIP_TIME_S.len()
+        GRIP_TIME_S.2
     } else {
         1
     };
