@@ -38,7 +38,7 @@
 //!   (N s/m) at the pulse onsets ([`HandJudgement::reflex_units`]).
 //! - `grip-compliance`: the hand is held by a spring-damper, `F_hand = k (x_h − x) + b
 //!   (v_h − v)`: `Δx_h = Δx + ΔF_hand/(k + b s)` from the measured force, then the
-//!   baseline refitted, for `k` on a log grid and `b/k` on a small one.
+//!   baseline refitted, for `k` and `b/k` on log grids.
 //!
 //! The target of every fit is `−ΔF_hand − M_arm Δa_h` and the normaliser `ΔF_hand`: the
 //! NRMSE is the error of predicting the hand's response force.
