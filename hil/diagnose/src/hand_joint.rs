@@ -273,7 +273,8 @@ pub const GRIP_LOAD_KG: (f64, f64, usize) = (0.0, 3.0, 151);
 
 /// Most rounds of [`settle_grip_load`] (the searched member's setting, then the load at
 /// it); it stops earlier when a round chooses the setting of the round before. On a
-/// reflex study's sessions hiding a grip and a mass it settles within 5.
+/// reflex study's sessions hiding a grip and a mass it mostly settles within 5; from no
+/// load, a soft grip behind a heavy mass can walk the ridge longer than this.
 pub const GRIP_LOAD_ROUNDS: usize = 10;
 
 /// `joint` with [`HandJoint::grip_load_kg`] set to the load that fits it best, when a
