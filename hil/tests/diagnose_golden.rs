@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "322dc3466da69f2c9961ddfdfad97e78196824bce84f0a029c94179f14290182",
+        "bf313bf4f8383c97461f8916f084f5d8b20090bea722219c79f703652af620d9",
     ),
     (
         "example-friction",
-        "8535f2822f1906871ea6bbdc41e1a907a9713a6cb8ca270c35c7514cba85acad",
+        "ceaed3292a4e43807450bf76830fe7d638a754d0ba3ffe7be339b344704e9aa0",
     ),
     (
         "example-nuisance",
-        "9697336fbec06537c397adc2ff879808b0979ca46759a75b47aae334931cdd57",
+        "34f3108ffd65523df84249fe7a17725e09eea518b4fd890ba4d080ce5e35d3f0",
     ),
     (
         "example-rotation-mass",
-        "bafa0617edc092ee718f44c09adf282f401d47a29a56f986f581c0d2316eb9ea",
+        "c86283697084fb3dc9bf54341dd765d54036513d598155516d21957537dd0d05",
     ),
 ];
 

@@ -564,6 +564,16 @@ fn a_stiff_grip_behind_a_heavier_handle_is_named_without_a_third_cause() {
     check_pair_in("grip-compliance+handle-mass", 3003, &Design::reflex_study());
 }
 
+/// A soft grip (2554 N/m) behind a heavy handle (0.99 kg) on a reflex study's pulses:
+/// searched by alternating steps from no load, the grip first took the grid's stiffest
+/// value and the load then the grid's 3 kg, and ten rounds walked the ridge between them
+/// only to 5.6 kN/m and 1.27 kg. The load's profile starts the search in the valley, and
+/// the pair is named alone, both within 20 %.
+#[test]
+fn a_soft_grip_behind_a_heavy_handle_is_found_from_the_load_profile() {
+    check_pair_in("grip-compliance+handle-mass", 3012, &Design::reflex_study());
+}
+
 /// A heavier handle on a subject with a stretch reflex, both on the hand balance, in a
 /// reflex study's layout: forward selection there names the stronger, then the other
 /// given it, from one joint fit (the mass on the handle's acceleration, the reflex on

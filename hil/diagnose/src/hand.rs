@@ -101,8 +101,12 @@ pub const FEEDBACK_DELAYS_MS: [f64; 1] = [60.0];
 /// latency reflexes of the upper limb appear at 20–50 ms); a shorter delay fits a
 /// near-instantaneous term that mimics inertia, not a reflex.
 pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
-/// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 41 values (~12 % apart).
-pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 41);
+/// Grip stiffnesses searched: log grid from 500 N/m to 50 kN/m, 81 values (5.9 % apart).
+/// On a reflex study's brief pulses a grip found one step of a 12 % grid off (3155 N/m
+/// for 3365) behind a heavier handle left a misfit a later round named as a short
+/// stretch reflex (2 of 20 sessions, none with this grid;
+/// `hil/docs/notes/2026-12-04-grip-load-profile.md`).
+pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 81);
 /// Grip time constants `b/k` searched, s: `(first, last, count)`, a log grid from 1 to
 /// 10 ms, 19 values 13.6 % apart (a grasp through skin and soft tissue: a few kN/m with
 /// tens of N s/m). On a reflex study's brief pulses the grip's damping shows, and the
@@ -822,6 +826,16 @@ pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
     )
 }
 
+/// Every other stiffness and every third time constant of the grip's grids (from the
+/// first of each, which keeps both ends: 41 × 7 settings, 24 % and 47 % apart): a coarse
+/// search that finds the valley the full grids refine.
+pub(crate) fn grip_coarse_settings() -> impl Iterator<Item = usize> {
+    let times = GRIP_TIME_S.2;
+    (0..GRIP_STIFFNESS_N_PER_M.2)
+        .step_by(2)
+        .flat_map(move |k| (0..times).step_by(3).map(move |t| k * times + t))
+}
+
 impl HandCandidate for GripCompliance {
     fn kind(&self) -> Option<EffectKind> {
         Some(EffectKind::GripCompliance)
@@ -1468,7 +1482,9 @@ mod tests {
         let (n, rate, m_arm) = (hand.df[0].len(), hand.rate_hz, hand.m_arm[0]);
         let d = Matrix2::new(12.0, -3.0, 5.0, 9.0);
         let k = Matrix2::new(420.0, 60.0, -140.0, 310.0);
-        let (setting, mass) = (16 * GRIP_TIME_S.2 + 13, 0.43);
+        // 3155 N/m: two fifths of the way up the stiffness grid's hundredfold.
+        let k_index = (GRIP_STIFFNESS_N_PER_M.2 - 1) * 2 / 5;
+        let (setting, mass) = (k_index * GRIP_TIME_S.2 + 13, 0.43);
         let (k_grip, tau) = grip_setting(setting);
         // The hand's jerk, by central differences of its acceleration, for the force's rate.
         let jerk = |a: &[f64], i: usize| {

@@ -23,8 +23,8 @@ use super::crossval::{CvFit, Folds, cross_validate};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::hand::{
-    HandBaseline, HandCandidate, HandJudgement, Kin, Whitening, base_columns, grip_setting,
-    hand_gram, hand_grams, visit_rows,
+    HandBaseline, HandCandidate, HandJudgement, Kin, Whitening, base_columns, grip_coarse_settings,
+    grip_setting, hand_gram, hand_grams, visit_rows,
 };
 use super::hand_signals::HandResponse;
 use crate::effect::EffectKind;
@@ -271,30 +271,45 @@ pub fn refine(
 /// which a load is not an unlisted part.
 pub const GRIP_LOAD_KG: (f64, f64, usize) = (0.0, 3.0, 151);
 
-/// Most rounds of [`settle_grip_load`] (the searched member's setting, then the load at
-/// it); it stops earlier when a round chooses the setting of the round before. On a
-/// reflex study's sessions hiding a grip and a mass it mostly settles within 5; from no
-/// load, a soft grip behind a heavy mass can walk the ridge longer than this.
+/// Most rounds of [`settle_grip_load`]'s polish (the searched member's setting, then
+/// the load at it); it stops earlier when a round chooses the setting of the round
+/// before. From the profile's load, on a reflex study's sessions hiding a grip and a
+/// mass, it mostly settles within 4 (at most 9).
 pub const GRIP_LOAD_ROUNDS: usize = 10;
+
+/// Every how many points of [`GRIP_LOAD_KG`] [`settle_grip_load`]'s profile evaluates
+/// (0.2 kg apart: 16 loads). The profile is smooth on that scale: the grip's stiffness
+/// and the load trade along a ridge a few hundred grams wide.
+pub const GRIP_PROFILE_STRIDE: usize = 10;
 
 /// `joint` with [`HandJoint::grip_load_kg`] set to the load that fits it best, when a
 /// grip and a handle mass are both members: the mass enters the grip's kinematics,
 /// which the balance multiplies by the subject's unknown `D` and `K`, so it is not a
-/// linear coefficient there. Each round takes the searched member's setting as the
-/// cross-validation chooses it on all units at the current load, then the load whose
-/// joint fit on all units leaves the least squared error at that setting
-/// ([`least_sse_load`]), from no load until a round chooses the setting the round
-/// before chose (the load at it is then the one just found: a fixed point), at most
-/// [`GRIP_LOAD_ROUNDS`] rounds. A stiff grip's setting and the load trade along a ridge,
-/// and a fixed two rounds stopped on it (5000 N/m and 0.50 kg for 5734 N/m and
-/// 0.45 kg), leaving a misfit that a later round named as a reflex
-/// (`hil/docs/notes/2026-12-04-grip-time-grid.md`). The load is one
-/// number, chosen like a setting, so the folds that judge the joint see no more of the
-/// held-out units than the setting does. The load is searched rather than taken from
-/// the mass the last fit found: that fixed point converges slowly where the grip is
-/// soft, and can run to a negative mass (the measurements:
-/// `hil/docs/notes/2026-12-03-hand-balance-settings.md`). Other joints are returned as
-/// they are.
+/// linear coefficient there. The load is one number, chosen like a setting, in two
+/// steps:
+/// 1. **The profile**, when the searched member is the grip. On every
+///    [`GRIP_PROFILE_STRIDE`]-th load of [`GRIP_LOAD_KG`], the least squared error on
+///    all units over the grip's coarse settings (every other stiffness, every third
+///    time constant); the load whose best setting leaves the least error starts the
+///    polish (otherwise it starts from no load). A soft grip and a heavier
+///    handle trade along a ridge, and a walk along it from no load, where a soft grip
+///    fits worst, first takes the stiffest grip of the grid and then the heaviest load
+///    (a 2.6 kN/m grip behind 0.99 kg came out 5.6 kN/m and 1.27 kg after 12 rounds,
+///    the error still falling every round).
+/// 2. **The polish.** Rounds of the setting the cross-validation chooses on all units
+///    at the current load, then the load whose joint fit at that setting leaves the
+///    least squared error ([`least_sse_load`], on the whole grid), until a round
+///    chooses the setting the round before chose (a fixed point), at most
+///    [`GRIP_LOAD_ROUNDS`]. A fixed two rounds stopped on the ridge (5000 N/m and
+///    0.50 kg for 5734 N/m and 0.45 kg), leaving a misfit that a later round named as
+///    a reflex.
+///
+/// The folds that judge the joint see no more of the held-out units than the setting
+/// does. The load is searched rather than taken from the mass the last fit found: that
+/// fixed point converges slowly where the grip is soft, and can run to a negative mass
+/// (the measurements: `hil/docs/notes/2026-12-03-hand-balance-settings.md`,
+/// `hil/docs/notes/2026-12-04-grip-time-grid.md`). Other joints are returned as they
+/// are.
 ///
 /// # Errors
 /// [`DiscrepancyError::Singular`] when a fit cannot be made.
@@ -308,14 +323,34 @@ pub fn settle_grip_load(
     {
         return Ok(joint);
     }
+    let grams_at = |joint: &HandJoint| -> Vec<Vec<Gram>> {
+        h.responses
+            .par_iter()
+            .map(|r| hand_grams(joint, r, h.fb_delay_s, &h.whitening))
+            .collect()
+    };
+    if joint.next.kind() == Some(EffectKind::GripCompliance) {
+        let (first, last, n) = GRIP_LOAD_KG;
+        let step = (last - first) / (n - 1) as f64;
+        let mut profile = Vec::new();
+        let coarse: Vec<usize> = grip_coarse_settings().collect();
+        for i in (0..n).step_by(GRIP_PROFILE_STRIDE) {
+            joint.grip_load_kg = first + step * i as f64;
+            if let Some(sse) = least_sse(&joint, &coarse, h) {
+                profile.push((joint.grip_load_kg, sse));
+            }
+        }
+        joint.grip_load_kg = profile
+            .iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .ok_or_else(|| DiscrepancyError::Singular {
+                what: format!("{} with a loaded grip", joint.name()),
+            })?
+            .0;
+    }
     let mut last = None;
     for _ in 0..GRIP_LOAD_ROUNDS {
-        let grams: Vec<_> = h
-            .responses
-            .par_iter()
-            .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
-            .collect();
-        let setting = cross_validate(&grams, &h.folds, joint.name())?.setting;
+        let setting = cross_validate(&grams_at(&joint), &h.folds, joint.name())?.setting;
         if last == Some(setting) {
             break;
         }
@@ -324,6 +359,24 @@ pub fn settle_grip_load(
         last = Some(setting);
     }
     Ok(joint)
+}
+
+/// The least squared error of `joint`'s fit on all units over `settings` of its
+/// searched member; `None` when none can be fitted.
+fn least_sse(joint: &HandJoint, settings: &[usize], h: &HandJudgement) -> Option<f64> {
+    settings
+        .par_iter()
+        .filter_map(|&s| {
+            let grams: Vec<Gram> = h
+                .responses
+                .iter()
+                .map(|r| hand_gram(joint, r, s, h.fb_delay_s, &h.whitening))
+                .collect();
+            let g = Gram::sum(joint.columns(), grams.iter());
+            g.solve().map(|b| g.sse(&b))
+        })
+        .filter(|sse| sse.is_finite())
+        .min_by(f64::total_cmp)
 }
 
 /// The grip load of [`GRIP_LOAD_KG`] whose joint fit at `setting` on all `responses`
