@@ -166,8 +166,8 @@ pub struct Ranked {
     /// For a parameter the search chooses on a grid (a reflex's delay): the values
     /// whose nearest grid value the held-out test cannot tell from the best (a
     /// one-sided paired t-test at 5 % on the test's folds, `CvFit::settings_kept` in
-    /// `crossval.rs`; the kept grid values widened to the midpoints with their
-    /// neighbours outside). A range much wider than the standard error says the
+    /// `crossval.rs`; the kept grid values and the reported one, widened to the
+    /// midpoints with their neighbours outside). A range much wider than the standard error says the
     /// session's layout does not pin the parameter: the folds agree on a value, but
     /// others fit as well. It speaks of the noise, not of a bias every fold shares.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
@@ -458,7 +458,10 @@ fn fold_stats(fit: &CvFit, base: &CvFit, base_nrmse: f64) -> (f64, f64, Vec<f64>
 
 /// The range of a searched parameter over the settings of `fit` its folds cannot tell
 /// from the best (`CvFit::settings_kept`, one-sided at 5 % with the folds' degrees of
-/// freedom), widened to the midpoints with the grid's next values outside it (the values
+/// freedom) and the `reported` one (the setting the parameters come from: where those
+/// come from a fit on other folds than the test's, the hand balance's averaged
+/// repetitions, the test's folds may tell it apart, and a range must hold its own
+/// value), widened to the midpoints with the grid's next values outside it (the values
 /// whose nearest grid value is kept: a parameter between two grid values is in the
 /// range of either), keyed by the parameter the setting is: `setting(s)` names it, or, where
 /// the setting's name is not a parameter's (the delay's `lag_ms` is its `delay_ms`),
@@ -467,16 +470,20 @@ fn fold_stats(fit: &CvFit, base: &CvFit, base_nrmse: f64) -> (f64, f64, Vec<f64>
 /// a baseline's `none` is not).
 fn searched_range(
     fit: &CvFit,
+    reported: usize,
     setting: impl Fn(usize) -> (&'static str, f64),
     parameters_at: impl Fn(usize) -> Vec<(String, f64)>,
     parameters: &BTreeMap<String, f64>,
 ) -> BTreeMap<String, [f64; 2]> {
     let df = fit.folds.len().saturating_sub(1).max(1);
-    let kept = fit.settings_kept(student_t_critical(0.05, df as f64));
+    let mut kept = fit.settings_kept(student_t_critical(0.05, df as f64));
     let mut out = BTreeMap::new();
     let Some(&first) = kept.first() else {
         return out;
     };
+    if !kept.contains(&reported) {
+        kept.push(reported);
+    }
     let (name, value) = setting(first);
     let name = if parameters.contains_key(name) {
         name.to_string()
@@ -618,6 +625,7 @@ impl Judge<'_> {
             params_with_se(c.parameters(fit.setting, &fit.beta, lat), &fold_params);
         let parameter_range = searched_range(
             fit,
+            fit.setting,
             |s| c.setting(s),
             |s| c.parameters(s, &fit.beta, lat),
             &parameters,
@@ -1873,6 +1881,7 @@ impl HandJudge<'_> {
         // On the test's folds: the independent units the t-test uses.
         let parameter_range = searched_range(
             test_fit,
+            fit.setting,
             |s| c.setting(s),
             |s| c.parameters(s, &test_fit.beta, h.fb_delay_s),
             &parameters,
@@ -2509,6 +2518,54 @@ fn evidence(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::crossval::FoldFit;
+
+    /// The searched range holds the value the parameters come from even where the
+    /// test's folds tell it apart from their best: on five stiffnesses 10 % apart with
+    /// four folds, the folds' best is the third and the fourth is kept with it (one
+    /// fold prefers it); the first is worse in every fold by 20–27 %, t far above
+    /// 2.35. Reported at the third, the range is the kept pair widened to the midpoints
+    /// with their neighbours; reported at the first (a fit on other folds chose it),
+    /// it runs from the first's lower midpoint (the grid's end: the value itself).
+    #[test]
+    fn the_searched_range_holds_the_reported_value() {
+        let grid = [1000.0, 1100.0, 1210.0, 1331.0, 1464.1];
+        let held_out = vec![
+            vec![1.5, 1.6, 1.55, 1.45],
+            vec![1.2, 1.3, 1.25, 1.2],
+            vec![1.0, 1.0, 1.0, 1.0],
+            vec![1.05, 0.98, 1.1, 1.02],
+            vec![1.6, 1.7, 1.5, 1.65],
+        ];
+        let fold = FoldFit {
+            setting: 2,
+            beta: vec![1.0],
+            test_sse: 1.0,
+            test_norm_sq: 4.0,
+        };
+        let fit = CvFit {
+            folds: vec![fold; 4],
+            setting: 2,
+            beta: vec![1.0],
+            gram: Gram::new(1),
+            curve: vec![6.0, 5.0, 4.0, 4.1, 6.5],
+            held_out,
+        };
+        let setting = |s: usize| ("stiffness_n_per_m", grid[s]);
+        let at = |s: usize| vec![("stiffness_n_per_m".to_string(), grid[s])];
+        let params = BTreeMap::from([("stiffness_n_per_m".to_string(), grid[2])]);
+        let range = |reported| searched_range(&fit, reported, setting, at, &params);
+        let [lo, hi] = range(2)["stiffness_n_per_m"];
+        assert!(
+            (lo - 1155.0).abs() < 1e-9 && (hi - 1397.55).abs() < 1e-9,
+            "{lo}–{hi}"
+        );
+        let [lo, hi] = range(0)["stiffness_n_per_m"];
+        assert!(
+            (lo - 1000.0).abs() < 1e-9 && (hi - 1397.55).abs() < 1e-9,
+            "{lo}–{hi}"
+        );
+    }
 
     /// A 200 Hz limit cycle sampled at 1 kHz, the encoder seeing half of the forces'
     /// fast motion 0.4 ms later: the cross sums peak at lag 0 with `½ cos(2π·0.08)` =
