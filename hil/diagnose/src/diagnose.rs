@@ -167,9 +167,9 @@ pub struct Ranked {
     /// whose nearest grid value the held-out test cannot tell from the best (a
     /// one-sided paired t-test at 5 % on the test's folds, `CvFit::settings_kept` in
     /// `crossval.rs`; the kept grid values and the reported one, widened to the
-    /// midpoints with their neighbours outside). A range much wider than the standard error says the
-    /// session's layout does not pin the parameter: the folds agree on a value, but
-    /// others fit as well. It speaks of the noise, not of a bias every fold shares.
+    /// midpoints with their neighbours outside). A range much wider than the standard
+    /// error says the session's layout does not pin the parameter: the folds agree on a
+    /// value, but others fit as well. It speaks of the noise, not of a bias every fold shares.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub parameter_range: BTreeMap<String, [f64; 2]>,
     /// The effects already named that this candidate was fitted jointly with and judged

@@ -323,12 +323,6 @@ pub fn settle_grip_load(
     {
         return Ok(joint);
     }
-    let grams_at = |joint: &HandJoint| -> Vec<Vec<Gram>> {
-        h.responses
-            .par_iter()
-            .map(|r| hand_grams(joint, r, h.fb_delay_s, &h.whitening))
-            .collect()
-    };
     if joint.next.kind() == Some(EffectKind::GripCompliance) {
         let (first, last, n) = GRIP_LOAD_KG;
         let step = (last - first) / (n - 1) as f64;
@@ -350,7 +344,12 @@ pub fn settle_grip_load(
     }
     let mut last = None;
     for _ in 0..GRIP_LOAD_ROUNDS {
-        let setting = cross_validate(&grams_at(&joint), &h.folds, joint.name())?.setting;
+        let grams: Vec<_> = h
+            .responses
+            .par_iter()
+            .map(|r| hand_grams(&joint, r, h.fb_delay_s, &h.whitening))
+            .collect();
+        let setting = cross_validate(&grams, &h.folds, joint.name())?.setting;
         if last == Some(setting) {
             break;
         }
@@ -366,17 +365,27 @@ pub fn settle_grip_load(
 fn least_sse(joint: &HandJoint, settings: &[usize], h: &HandJudgement) -> Option<f64> {
     settings
         .par_iter()
-        .filter_map(|&s| {
-            let grams: Vec<Gram> = h
-                .responses
-                .iter()
-                .map(|r| hand_gram(joint, r, s, h.fb_delay_s, &h.whitening))
-                .collect();
-            let g = Gram::sum(joint.columns(), grams.iter());
-            g.solve().map(|b| g.sse(&b))
-        })
+        .filter_map(|&s| sse_on_all(joint, s, &h.responses, h.fb_delay_s, &h.whitening))
         .filter(|sse| sse.is_finite())
         .min_by(f64::total_cmp)
+}
+
+/// The squared error of `joint`'s fit at `setting` on all `responses` together
+/// (weighted by `w`, with the feedback delay `fb_delay_s`); `None` when it cannot be
+/// fitted.
+fn sse_on_all(
+    joint: &HandJoint,
+    setting: usize,
+    responses: &[HandResponse],
+    fb_delay_s: f64,
+    w: &Whitening,
+) -> Option<f64> {
+    let grams: Vec<Gram> = responses
+        .iter()
+        .map(|r| hand_gram(joint, r, setting, fb_delay_s, w))
+        .collect();
+    let g = Gram::sum(joint.columns(), grams.iter());
+    g.solve().map(|b| g.sse(&b))
 }
 
 /// The grip load of [`GRIP_LOAD_KG`] whose joint fit at `setting` on all `responses`
@@ -400,12 +409,7 @@ pub fn least_sse_load(
         .map(|i| {
             let mut j = joint.clone();
             j.grip_load_kg = first + step * i as f64;
-            let grams: Vec<_> = responses
-                .iter()
-                .map(|r| hand_gram(&j, r, setting, fb_delay_s, w))
-                .collect();
-            let g = Gram::sum(j.columns(), grams.iter());
-            g.solve().map_or(f64::INFINITY, |b| g.sse(&b))
+            sse_on_all(&j, setting, responses, fb_delay_s, w).unwrap_or(f64::INFINITY)
         })
         .collect();
     let best = (0..n)
