@@ -179,7 +179,54 @@ impl Default for ArmParams {
     }
 }
 
+/// Body mass of the subject the default segments describe, kg. Derived: Shadmehr &
+/// Mussa-Ivaldi's 1.93 and 1.52 kg are, to the gram, Winter's segment fractions of
+/// body mass (upper arm 0.028; forearm 0.016 plus hand 0.006, 0.022) of a 69 kg body
+/// (Winter, *Biomechanics and Motor Control of Human Movement*, Table 4.1).
+pub const DEFAULT_BODY_MASS_KG: f64 = 69.0;
+
 impl ArmParams {
+    /// The same arm for a subject of `body_mass_kg` (the session manifest's
+    /// `body_mass_kg`): each segment's mass and moment of inertia in proportion to body
+    /// mass, its length and centre of mass kept (fixed fractions of body mass, as the
+    /// tables behind the defaults: [`DEFAULT_BODY_MASS_KG`]). A 69 kg subject keeps the
+    /// arm bit for bit.
+    pub fn with_body_mass(mut self, body_mass_kg: f64) -> Result<ArmParams, ArmError> {
+        if !(body_mass_kg.is_finite() && body_mass_kg > 0.0) {
+            return Err(ArmError::InvalidParameter {
+                key: "body_mass_kg",
+                reason: format!("must be finite and > 0, got {body_mass_kg}"),
+            });
+        }
+        if body_mass_kg != DEFAULT_BODY_MASS_KG {
+            let f = body_mass_kg / DEFAULT_BODY_MASS_KG;
+            for s in [&mut self.upper, &mut self.fore] {
+                s.mass_kg *= f;
+                s.inertia_kg_m2 *= f;
+            }
+        }
+        Ok(self)
+    }
+
+    /// The default arm of a subject as a session manifest describes one: its segment
+    /// lengths and body mass where given ([`Self::with_lengths`],
+    /// [`Self::with_body_mass`]), the defaults where not.
+    pub fn of_subject(
+        upper_arm_m: Option<f64>,
+        forearm_m: Option<f64>,
+        body_mass_kg: Option<f64>,
+    ) -> Result<ArmParams, ArmError> {
+        let d = ArmParams::default();
+        let arm = ArmParams::with_lengths(
+            upper_arm_m.unwrap_or(d.upper.length_m),
+            forearm_m.unwrap_or(d.fore.length_m),
+        )?;
+        match body_mass_kg {
+            Some(kg) => arm.with_body_mass(kg),
+            None => Ok(arm),
+        }
+    }
+
     /// The default arm with a subject's segment lengths \[m\] (the session manifest's
     /// `upper_arm_m`, `forearm_m`); see [`Segment::scaled_to_length`] for the scaling.
     pub fn with_lengths(upper_arm_m: f64, forearm_m: f64) -> Result<ArmParams, ArmError> {

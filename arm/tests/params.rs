@@ -59,3 +59,38 @@ fn validation_names_the_key() {
             .contains("scale_per_trial")
     );
 }
+
+/// A subject's body mass scales the arm's inertia and nothing else: the default
+/// segments are Winter's fractions of 69 kg (0.028 and 0.022 of it, to the gram); a
+/// 69 kg subject keeps the arm bit for bit; an 80 kg one has every segment mass and
+/// moment of inertia, and so the endpoint inertia `J⁻ᵀ M(q) J⁻¹` (linear in both) at any
+/// posture, 80/69 of the default's to round-off (1e-12), with lengths and centres of mass
+/// unchanged; a body mass that is not positive and finite is refused by its key.
+#[test]
+fn body_mass_scales_the_arms_inertia_in_proportion() {
+    use rigtwin_arm::impedance::endpoint_inertia;
+    use rigtwin_arm::params::DEFAULT_BODY_MASS_KG;
+    let d = ArmParams::default();
+    assert!((0.028 * DEFAULT_BODY_MASS_KG - d.upper.mass_kg).abs() < 5e-3);
+    assert!((0.022 * DEFAULT_BODY_MASS_KG - d.fore.mass_kg).abs() < 5e-3);
+    assert_eq!(d.clone().with_body_mass(DEFAULT_BODY_MASS_KG).unwrap(), d);
+    let f = 80.0 / DEFAULT_BODY_MASS_KG;
+    let heavy = ArmParams::of_subject(Some(0.31), Some(0.35), Some(80.0)).unwrap();
+    let light = ArmParams::of_subject(Some(0.31), Some(0.35), None).unwrap();
+    for (h, l) in [(heavy.upper, light.upper), (heavy.fore, light.fore)] {
+        assert_eq!((h.length_m, h.com_m), (l.length_m, l.com_m));
+        assert!((h.mass_kg / l.mass_kg - f).abs() < 1e-12);
+        assert!((h.inertia_kg_m2 / l.inertia_kg_m2 - f).abs() < 1e-12);
+    }
+    for q in [[0.3, 1.2], [0.8, 1.9], [-0.2, 0.7]] {
+        let (mh, ml) = (
+            endpoint_inertia(&heavy, q).unwrap(),
+            endpoint_inertia(&light, q).unwrap(),
+        );
+        assert!((mh - ml * f).norm() < 1e-12 * ml.norm(), "{mh} vs {ml}");
+    }
+    for bad in [0.0, -70.0, f64::NAN, f64::INFINITY] {
+        let err = d.clone().with_body_mass(bad).unwrap_err();
+        assert!(err.to_string().contains("body_mass_kg"), "{err}");
+    }
+}

@@ -67,7 +67,8 @@ pub const HAND_LEAD_S: f64 = 0.13;
 /// The arm's known geometry and inertia at the rig.
 #[derive(Debug, Clone)]
 pub struct HandArm {
-    /// Arm parameters (the default arm with the subject's segment lengths).
+    /// Arm parameters (the default arm with the subject's segment lengths and, in
+    /// proportion to body mass, segment masses: [`ArmParams::of_subject`]).
     pub params: ArmParams,
     /// Shoulder, rig frame, m.
     pub shoulder_m: [f64; 2],
@@ -76,21 +77,23 @@ pub struct HandArm {
 }
 
 impl HandArm {
-    /// From the manifest's subject (default lengths when the manifest has none).
+    /// From the manifest's subject (default lengths and body mass where the manifest
+    /// has none).
     ///
     /// # Errors
-    /// [`DiscrepancyError::Model`] when the lengths are not physical.
+    /// [`DiscrepancyError::Model`] when the lengths or the body mass are not physical.
     pub fn from_session(session: &Session) -> Result<HandArm, DiscrepancyError> {
         let s = &session.manifest.subject;
-        let d = ArmParams::default();
-        let upper = s.upper_arm_m.unwrap_or(d.upper.length_m);
-        let fore = s.forearm_m.unwrap_or(d.fore.length_m);
         let err = |reason: String| DiscrepancyError::Model {
             path: session.dir.join("session.toml"),
             reason,
         };
-        let params = ArmParams::with_lengths(upper, fore)
-            .map_err(|e| err(format!("subject.upper_arm_m / forearm_m: {e}")))?;
+        let params =
+            ArmParams::of_subject(s.upper_arm_m, s.forearm_m, s.body_mass_kg).map_err(|e| {
+                err(format!(
+                    "subject.upper_arm_m / forearm_m / body_mass_kg: {e}"
+                ))
+            })?;
         let model =
             MuscleModel::new(&params.muscles).map_err(|e| err(format!("arm muscles: {e}")))?;
         Ok(HandArm {

@@ -21,7 +21,8 @@ pub struct Timing {
 }
 
 /// The reach-perturb protocol with the session's device, handle and shoulder; the arm is
-/// the nominal one (segment lengths come in through the subject's factors).
+/// the nominal one with the segment masses of the subject's body mass where the manifest
+/// gives it (segment lengths come in through the subject's factors).
 pub(crate) fn session_protocol(session: &Session) -> Result<Protocol, DiscrepancyError> {
     let m = &session.manifest;
     let err = |reason: String| DiscrepancyError::Replay { trial: 0, reason };
@@ -51,6 +52,14 @@ pub(crate) fn session_protocol(session: &Session) -> Result<Protocol, Discrepanc
     }
     protocol.subjects.first_is_nominal = true;
     protocol.subjects.shoulder_m = m.subject.shoulder_m;
+    if let Some(kg) = m.subject.body_mass_kg {
+        protocol.subjects.arm = protocol
+            .subjects
+            .arm
+            .clone()
+            .with_body_mass(kg)
+            .map_err(|e| err(format!("subject.body_mass_kg: {e}")))?;
+    }
     Ok(protocol)
 }
 

@@ -144,10 +144,10 @@ pub fn borner_on_session(
     config: &EstimateConfig,
 ) -> Result<BornerResult, SessionEstimateError> {
     let m = &session.manifest;
-    let defaults = ArmParams::default();
-    let arm = ArmParams::with_lengths(
-        m.subject.upper_arm_m.unwrap_or(defaults.upper.length_m),
-        m.subject.forearm_m.unwrap_or(defaults.fore.length_m),
+    let arm = ArmParams::of_subject(
+        m.subject.upper_arm_m,
+        m.subject.forearm_m,
+        m.subject.body_mass_kg,
     )?;
     let mut trials = Vec::new();
     let mut m_sum = [[0.0; 2]; 2];
@@ -233,10 +233,10 @@ pub fn piovesan_on_session(
     };
     let m = &session.manifest;
     let h = m.device.handle_mass_kg.unwrap_or(0.0);
-    let defaults = ArmParams::default();
-    let arm = ArmParams::with_lengths(
-        m.subject.upper_arm_m.unwrap_or(defaults.upper.length_m),
-        m.subject.forearm_m.unwrap_or(defaults.fore.length_m),
+    let arm = ArmParams::of_subject(
+        m.subject.upper_arm_m,
+        m.subject.forearm_m,
+        m.subject.body_mass_kg,
     )?;
     let mut out = Vec::new();
     for (entry, table) in session.iter() {
