@@ -6,6 +6,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/r --repetitions 9
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/s --repetitions 9 --pulse 0.05,30
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/i --ideal
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/h --arm-inertia-scale 1.15
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -16,14 +17,16 @@
 //! shared sessions'); `--pulse SECONDS,NEWTONS` sets the force pulse's duration and
 //! amplitude (default the protocol's 0.15 s, 15 N; `Design::reflex_study` is
 //! `--repetitions 9 --pulse 0.05,30`); `--ideal` drops the rig's and subject's nuisances
-//! (on by default: a lab's rig). Prints the session folder and what it hides.
+//! (on by default: a lab's rig); `--arm-inertia-scale F` multiplies the simulated arm's
+//! segment masses and moments of inertia by `F` (a subject heavier or lighter than the
+//! tables the diagnosis assumes; default 1). Prints the session folder and what it hides.
 
 use rigtwin_tests::generator::{Design, EFFECTS, generate_design, parse_pulse};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -31,6 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut repetitions = None;
     let mut pulse = None;
     let mut ideal = false;
+    let mut arm_inertia_scale = 1.0;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -45,6 +49,20 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                     return Err("--repetitions must be at least 1".into());
                 }
                 repetitions = Some(n);
+            }
+            "--arm-inertia-scale" => {
+                let v = args
+                    .next()
+                    .ok_or_else(|| format!("--arm-inertia-scale needs a factor; {}", usage()))?;
+                let f: f64 = v
+                    .parse()
+                    .map_err(|e| format!("--arm-inertia-scale {v:?}: {e}"))?;
+                if !(f.is_finite() && f > 0.0) {
+                    return Err(
+                        format!("--arm-inertia-scale must be a positive factor, got {v}").into(),
+                    );
+                }
+                arm_inertia_scale = f;
             }
             "--pulse" => {
                 let v = args
@@ -74,6 +92,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     if ideal {
         design.nuisance = None;
     }
+    design.arm_inertia_scale = arm_inertia_scale;
     let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);

@@ -310,6 +310,11 @@ pub struct Design {
     /// The recording rate, Hz (a divisor of the 4 kHz control rate): 1000 on the
     /// shared sessions; labs log at 500 Hz to 4 kHz.
     pub rate_hz: u32,
+    /// The factor on the simulated arm's segment masses and moments of inertia (1: the
+    /// tables the diagnosis assumes; the manifest does not say it): a subject whose arm
+    /// is heavier or lighter than the anthropometric model, to measure what the hand
+    /// balance makes of it.
+    pub arm_inertia_scale: f64,
 }
 
 impl Design {
@@ -322,6 +327,7 @@ impl Design {
         pulse: None,
         nuisance: Some(NuisanceConfig::REALISTIC),
         rate_hz: 1000,
+        arm_inertia_scale: 1.0,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -344,6 +350,7 @@ impl Design {
             pulse: None,
             nuisance: Some(NuisanceConfig::REALISTIC),
             rate_hz: 1000,
+            arm_inertia_scale: 1.0,
         }
     }
 
@@ -446,6 +453,13 @@ pub fn generate_design(
         protocol.subjects.arm.feedback.delay_ms = ms;
     }
     protocol.subjects.first_is_nominal = false;
+    for segment in [
+        &mut protocol.subjects.arm.upper,
+        &mut protocol.subjects.arm.fore,
+    ] {
+        segment.mass_kg *= design.arm_inertia_scale;
+        segment.inertia_kg_m2 *= design.arm_inertia_scale;
+    }
     if let Some(p) = &design.pulse {
         protocol.controller.force_pulse = p.clone();
     }
