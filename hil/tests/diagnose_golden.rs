@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "bf313bf4f8383c97461f8916f084f5d8b20090bea722219c79f703652af620d9",
+        "07bd901b25dea35cedeac6b0e1d1f3a6dea2cf68ed64a99a12f298cf1255af9a",
     ),
     (
         "example-friction",
-        "ceaed3292a4e43807450bf76830fe7d638a754d0ba3ffe7be339b344704e9aa0",
+        "d14bb031fc541af3114127d1e26a1d2e7ac283185f134ea88acc788ad54d71dd",
     ),
     (
         "example-nuisance",
-        "34f3108ffd65523df84249fe7a17725e09eea518b4fd890ba4d080ce5e35d3f0",
+        "e09b84f6da8e379fa45fd45cdb5e59c174f00e74fae9b80c92a60986d7c22a50",
     ),
     (
         "example-rotation-mass",
-        "c86283697084fb3dc9bf54341dd765d54036513d598155516d21957537dd0d05",
+        "9aa651e8bd4112aea28a2ee9bb2020e488a8d5118fcf085e5679d830cd2b473c",
     ),
 ];
 

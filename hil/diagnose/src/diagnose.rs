@@ -78,8 +78,8 @@ use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
 use super::hand::{
-    HandCandidate, HandJudgement, ReplicateTest, baseline_parameters, hand_candidate,
-    hand_fit_rows, judge_hand,
+    ARM_INERTIA_TOLERANCE, ArmInertia, HandCandidate, HandJudgement, ReplicateTest,
+    baseline_parameters, hand_candidate, hand_fit_rows, judge_hand,
 };
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
 use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
@@ -360,6 +360,12 @@ pub struct Diagnosis {
     pub hand_weighting_source: Option<String>,
     /// The hand balance baseline's fitted parameters.
     pub hand_baseline: BTreeMap<String, f64>,
+    /// The factor on the arm's inertia (the tables', scaled to the subject's segment
+    /// lengths and body mass) that fits the responses best within ±20 %
+    /// (`ARM_INERTIA_TOLERANCE`) given the named human-side effects
+    /// (`hand::ArmInertia`): a nuisance of every subject, never a cause. Against the
+    /// baseline alone it is the rival a heavier handle or a grip must beat.
+    pub hand_arm_inertia_scale: Option<f64>,
     /// Every judged candidate, best held-out gain first.
     pub ranking: Vec<Ranked>,
     /// The cart balance's later rounds of forward selection: every candidate not yet
@@ -1345,6 +1351,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_baseline: BTreeMap::new(),
         hand_weighting: BTreeMap::new(),
         hand_weighting_source: None,
+        hand_arm_inertia_scale: None,
         ranking: Vec::new(),
         conditional: Vec::new(),
         unexplained: None,
@@ -1775,7 +1782,9 @@ fn rank_hand(
                 scale,
             };
             let selected = hand_forward_select(&judge, &ranked)?;
-            d.hand_unexplained = hand_outside_the_catalog(&judge, &selected.members)?;
+            let (unexplained, arm_scale) = hand_outside_the_catalog(&judge, &selected.members)?;
+            d.hand_unexplained = unexplained;
+            d.hand_arm_inertia_scale = Some(arm_scale);
             hand_named = selected.causes;
             hand_lead = selected.lead;
             d.conditional.extend(selected.rounds);
@@ -1825,7 +1834,8 @@ fn hand_row(
         min_gain,
         scale,
     };
-    judge.row(hf.candidate.as_ref(), &hf.fit, &h.baseline, test, &[])
+    let row = judge.row(hf.candidate.as_ref(), &hf.fit, &h.baseline, test, &[]);
+    judge.against_the_arm(row, &hf.fit, test.map(|t| t.0))
 }
 
 /// How a hand-balance candidate is judged: against `base` (the hand baseline, or the
@@ -1840,6 +1850,40 @@ struct HandJudge<'a> {
 }
 
 impl HandJudge<'_> {
+    /// `row`, a heavier handle or a grip judged against the baseline (fitted as `fit`, and
+    /// as `test` on the independent units when there are), rejected unless it also
+    /// explains the responses better than the rival [`ArmInertia`] (an arm within
+    /// ±[`ARM_INERTIA_TOLERANCE`] of the tables), by the same one-sided t-test on the
+    /// same folds: an inertia an arm off the tables can make is not a finding. A stretch
+    /// reflex is not held to it: on long pulses what tells it from the baseline is
+    /// mostly its inertial part `g δ S Δa`, which the rival takes up as well (with the
+    /// rival, 4 of the 20 reflexes of the shared layout's sweep were named, all 20
+    /// without), and what the arm's tables make of one is measured instead (README).
+    fn against_the_arm(&self, mut row: Ranked, fit: &CvFit, test: Option<&CvFit>) -> Ranked {
+        let h = self.h;
+        if !matches!(
+            row.kind,
+            Some(EffectKind::HandleMass | EffectKind::GripCompliance)
+        ) {
+            return row;
+        }
+        let rival = &h.arm_inertia;
+        let (test_fit, test_rival) = match (test, h.replicates.as_ref()) {
+            (Some(t), Some(rep)) => (t, &rep.arm_inertia),
+            _ => (fit, rival),
+        };
+        let (_, _, _, t) = fold_stats(test_fit, test_rival, test_rival.nrmse());
+        if t.is_nan() || t <= self.t_crit {
+            let scale = 1.0 + rival.beta.last().copied().unwrap_or(f64::NAN);
+            row.rejected.push(format!(
+                "not told from the subject's arm: its inertia ×{scale:.2} of the tables' (within ±{:.0} %) explains the responses as well (t {t:.1} against it)",
+                ARM_INERTIA_TOLERANCE * 100.0
+            ));
+            row.significant = false;
+        }
+        row
+    }
+
     /// A reflex's parameters also in joint and endpoint units (from its gain).
     fn with_units(
         &self,
@@ -2111,6 +2155,7 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
                 .as_ref()
                 .zip(h.replicates.as_ref().map(|rep| &rep.baseline));
             let lead = judge.row(&joint, &fit.fit, &h.baseline, test, &[]);
+            let lead = judge.against_the_arm(lead, &fit.fit, fit.test.as_ref());
             if !lead.significant {
                 return Ok(None);
             }
@@ -2140,16 +2185,35 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
 /// [`FORCE_RESOLUTION_N`] of force in the responses; the best that passes enters, at
 /// most [`MAX_HAND_TERMS`]. What entered is the hand balance's `unexplained` structure,
 /// with the law it fits and where the residual without it lives.
+///
+/// The arm's inertia within its tolerance ([`ArmInertia`]) is fitted given the named
+/// effects first, judged against them alone by the same rules, and enters the model the
+/// library is judged against when it passes: what an arm off the tables makes is not
+/// structure outside the catalog. Returned beside: its scale given the named effects
+/// (`hand_arm_inertia_scale`).
 fn hand_outside_the_catalog(
     judge: &HandJudge<'_>,
     named: &[HandMember],
-) -> Result<Option<Unexplained>, DiscrepancyError> {
+) -> Result<(Option<Unexplained>, f64), DiscrepancyError> {
     let h = judge.h;
     let given = |members: &[HandMember]| settle_grip_load(HandJoint::given(members.to_vec()), h);
-    let start_joint = given(named)?;
-    let start = fit_on_units(h, &start_joint)?;
+    let named_joint = given(named)?;
+    let named_fit = fit_on_units(h, &named_joint)?;
+    let (arm_row, arm_joint, arm_fit) =
+        hand_joint_row(judge, named, Arc::new(ArmInertia), &named_fit)?;
+    let arm_scale = arm_joint
+        .member_parameters(arm_fit.fit.setting, &arm_fit.fit.beta, h.fb_delay_s)
+        .last()
+        .and_then(|(_, p)| p.first().map(|(_, v)| *v))
+        .unwrap_or(1.0);
+    let (start_joint, start, mut members) = if arm_row.significant {
+        let mut members = arm_joint.fixed.clone();
+        members.push((arm_joint.next.clone(), arm_fit.fit.setting));
+        (arm_joint, arm_fit, members)
+    } else {
+        (named_joint, named_fit, named.to_vec())
+    };
     let start_nrmse = start.fit.nrmse();
-    let mut members = named.to_vec();
     // The model the next term is judged against, once a term has entered.
     let mut later: Option<HandJointFit> = None;
     let mut chosen: Vec<(HandTerm, Ranked)> = Vec::new();
@@ -2178,7 +2242,7 @@ fn hand_outside_the_catalog(
         last = Some((joint, fit));
     }
     let (Some((joint, fit)), Some((_, r_last))) = (last, chosen.last()) else {
-        return Ok(None);
+        return Ok((None, arm_scale));
     };
     // Each term's coefficients per axis from the last joint fit, with their jackknife
     // errors over the folds.
@@ -2208,19 +2272,22 @@ fn hand_outside_the_catalog(
         })
         .collect();
     let (correlations, band_shares) = hand_residual_structure(h, &start_joint, &start.fit);
-    Ok(Some(Unexplained {
-        balance: "hand".into(),
-        given: named.iter().map(|(c, _)| c.name().to_string()).collect(),
-        gain: 1.0 - r_last.extended_nrmse / start_nrmse,
-        hint: terms
-            .iter()
-            .map(|t| format!("the hand's restoring force ≈ {} ({})", t.law, t.meaning))
-            .collect::<Vec<_>>()
-            .join("; plus "),
-        terms,
-        correlations,
-        band_shares,
-    }))
+    Ok((
+        Some(Unexplained {
+            balance: "hand".into(),
+            given: named.iter().map(|(c, _)| c.name().to_string()).collect(),
+            gain: 1.0 - r_last.extended_nrmse / start_nrmse,
+            hint: terms
+                .iter()
+                .map(|t| format!("the hand's restoring force ≈ {} ({})", t.law, t.meaning))
+                .collect::<Vec<_>>()
+                .join("; plus "),
+            terms,
+            correlations,
+            band_shares,
+        }),
+        arm_scale,
+    ))
 }
 
 /// Where the hand balance's residual of the named effects' model `joint` (with `fit`'s

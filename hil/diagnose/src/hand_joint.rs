@@ -196,6 +196,19 @@ impl HandCandidate for HandJoint {
             .enumerate()
             .all(|(i, (c, cs))| c.physical(cs, &self.slice(i, beta)))
     }
+    /// Every member's bounds on its own columns, where the joint lays them out.
+    fn bounds(&self) -> Vec<(usize, f64, f64)> {
+        let nb = base_columns();
+        let mut at = nb;
+        let mut out = Vec::new();
+        for (c, _) in self.members(0) {
+            for (col, lo, hi) in c.bounds() {
+                out.push((if col < nb { col } else { at + col - nb }, lo, hi));
+            }
+            at += c.extra_columns();
+        }
+        out
+    }
 }
 
 /// A candidate's fit on the hand balance's units and, when the units average

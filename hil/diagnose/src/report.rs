@@ -107,11 +107,14 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
-            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {} from the {}), held-out NRMSE {:.4}",
+            "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths and body mass{}, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {} from the {}), held-out NRMSE {:.4}",
             d.hand_trials_used,
             d.hand_units,
             d.hand_test_units
                 .map(|n| format!(" (odd parts of opposite pulses; t-test on {n} repetitions)"))
+                .unwrap_or_default(),
+            d.hand_arm_inertia_scale
+                .map(|f| format!(" (×{f:.2} of it fits best given the named effects)"))
                 .unwrap_or_default(),
             d.hand_baseline
                 .get("feedback_delay_ms")
