@@ -191,21 +191,26 @@ impl ArmParams {
     /// mass, its length and centre of mass kept (fixed fractions of body mass, as the
     /// tables behind the defaults: [`DEFAULT_BODY_MASS_KG`]). A 69 kg subject keeps the
     /// arm bit for bit.
-    pub fn with_body_mass(mut self, body_mass_kg: f64) -> Result<ArmParams, ArmError> {
+    pub fn with_body_mass(self, body_mass_kg: f64) -> Result<ArmParams, ArmError> {
         if !(body_mass_kg.is_finite() && body_mass_kg > 0.0) {
             return Err(ArmError::InvalidParameter {
                 key: "body_mass_kg",
                 reason: format!("must be finite and > 0, got {body_mass_kg}"),
             });
         }
-        if body_mass_kg != DEFAULT_BODY_MASS_KG {
-            let f = body_mass_kg / DEFAULT_BODY_MASS_KG;
-            for s in [&mut self.upper, &mut self.fore] {
-                s.mass_kg *= f;
-                s.inertia_kg_m2 *= f;
-            }
+        // 69 / 69 is exactly 1, and a product with 1 is the value itself.
+        Ok(self.with_mass_scale(body_mass_kg / DEFAULT_BODY_MASS_KG))
+    }
+
+    /// The same arm with every segment's mass and moment of inertia times `factor`, its
+    /// lengths and centres of mass kept: a heavier or lighter arm of the same build.
+    #[must_use]
+    pub fn with_mass_scale(mut self, factor: f64) -> ArmParams {
+        for s in [&mut self.upper, &mut self.fore] {
+            s.mass_kg *= factor;
+            s.inertia_kg_m2 *= factor;
         }
-        Ok(self)
+        self
     }
 
     /// The default arm of a subject as a session manifest describes one: its segment

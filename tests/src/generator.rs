@@ -453,13 +453,11 @@ pub fn generate_design(
         protocol.subjects.arm.feedback.delay_ms = ms;
     }
     protocol.subjects.first_is_nominal = false;
-    for segment in [
-        &mut protocol.subjects.arm.upper,
-        &mut protocol.subjects.arm.fore,
-    ] {
-        segment.mass_kg *= design.arm_inertia_scale;
-        segment.inertia_kg_m2 *= design.arm_inertia_scale;
-    }
+    protocol.subjects.arm = protocol
+        .subjects
+        .arm
+        .clone()
+        .with_mass_scale(design.arm_inertia_scale);
     if let Some(p) = &design.pulse {
         protocol.controller.force_pulse = p.clone();
     }
