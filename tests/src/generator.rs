@@ -91,6 +91,30 @@ pub struct Hidden {
     pub feedback_delay_ms: Option<f64>,
 }
 
+impl Hidden {
+    /// A grip of `stiffness_n_per_m` with `damping_n_s_per_m` and nothing else, for
+    /// [`generate_hidden`]: grips outside [`draw`]'s range.
+    #[must_use]
+    pub fn grip(stiffness_n_per_m: f64, damping_n_s_per_m: f64) -> Hidden {
+        let name = EffectKind::GripCompliance.name();
+        let p = BTreeMap::from([("stiffness_n_per_m".to_string(), stiffness_n_per_m)]);
+        Hidden {
+            effect: name.to_string(),
+            each: vec![(name.to_string(), p.clone())],
+            parameters: p,
+            effects: PlantEffects {
+                grip_compliance: Some(GripCompliance {
+                    stiffness_n_per_m,
+                    damping_n_s_per_m,
+                }),
+                ..PlantEffects::default()
+            },
+            stretch_reflex: None,
+            feedback_delay_ms: None,
+        }
+    }
+}
+
 /// Draws the parameters of `effect` from realistic ranges; `None` for an unknown name.
 ///
 /// - `rail-friction`: `Fc` 1–4 N, `b` 2–10 N s/m, smoothing 0.5–2 mm/s (linear-stage
@@ -435,6 +459,20 @@ pub fn generate_design(
     let hidden = draw(effect, &mut rng).ok_or_else(|| {
         format!("unknown effect {effect:?}; known: {EFFECTS:?}, or two of them joined by +")
     })?;
+    generate_hidden(hidden, seed, design, out)
+}
+
+/// [`generate_design`] hiding `hidden` as given instead of drawn: parameters outside
+/// [`draw`]'s ranges. The subject depends on `seed` alone, as there.
+///
+/// # Errors
+/// The runtime's error.
+pub fn generate_hidden(
+    mut hidden: Hidden,
+    seed: u64,
+    design: &Design,
+    out: &Path,
+) -> Result<Generated, Box<dyn std::error::Error + Send + Sync>> {
     let mut protocol = Protocol::builtin("reach-perturb")?;
     protocol.recording.rate_hz = design.rate_hz;
     // The pulses in random order among the reaches, all of them within the recorded
@@ -474,7 +512,6 @@ pub fn generate_design(
     };
     let r = rehearse::rehearse(&protocol, &options, &|_| {}, &AtomicBool::new(false))?;
     let subject = r.subjects.first().ok_or("the rehearsal wrote no session")?;
-    let mut hidden = hidden;
     // A late feedback's gain is the subject's own (the protocol draws it): recorded with
     // the delay as what a diagnosis should recover.
     if hidden.feedback_delay_ms.is_some() {
