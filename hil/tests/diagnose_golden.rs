@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "07bd901b25dea35cedeac6b0e1d1f3a6dea2cf68ed64a99a12f298cf1255af9a",
+        "e557f5aa1d367d53f6244165dd717a39c59c469cc80ddef137cac4ca0717b5e9",
     ),
     (
         "example-friction",
-        "d14bb031fc541af3114127d1e26a1d2e7ac283185f134ea88acc788ad54d71dd",
+        "9134aa47bd6d5abc63950339b3c6c458100edfe29b6f8f9faf09626c8f2de89f",
     ),
     (
         "example-nuisance",
-        "e09b84f6da8e379fa45fd45cdb5e59c174f00e74fae9b80c92a60986d7c22a50",
+        "a08963db8e813488722513ca7f1da8dfd1d073f3f31c1a9d9d44447ef64c0b5e",
     ),
     (
         "example-rotation-mass",
-        "9aa651e8bd4112aea28a2ee9bb2020e488a8d5118fcf085e5679d830cd2b473c",
+        "c007bd6e1968ee5bc2578b1aa6b402c308484c9614616328e81534ebd295c5f1",
     ),
 ];
 

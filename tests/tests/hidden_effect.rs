@@ -35,7 +35,8 @@ use rigtwin::session::Session;
 use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, write_report};
 use rigtwin_tests::generate_and_diagnose;
 use rigtwin_tests::generator::{
-    Design, EFFECTS, Generated, OUT_OF_CATALOG, PAIRS, generate_design, parse_pulse,
+    Design, EFFECTS, Generated, Hidden, OUT_OF_CATALOG, PAIRS, generate_design, generate_hidden,
+    parse_pulse,
 };
 
 fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
@@ -271,22 +272,53 @@ fn a_grips_searched_range_holds_the_stiffness_it_reports() {
     );
 }
 
+/// A soft grip with heavy damping, beyond the generator's drawn range (2–6 kN/m,
+/// τ 2–6 ms): 1500 N/m with 25 N s/m, a time constant of 17 ms. With the grip's time
+/// constants searched up to 10 ms the stiffness came out 1991–2108 N/m on this subject and
+/// five others (33–41 % high: the spring took up the damping the grid could not reach)
+/// and half of them reported `hand_unexplained`; searched up to 40 ms, 1493–1675
+/// (`hil/sweeps/grip-soft.toml`). Asserted: the grip alone is named, its stiffness within
+/// 20 %, its damping within 30 % (a time constant on a grid 13 % apart, traded against
+/// the stiffness), a held-out gain of 50 %, nothing unexplained.
+#[test]
+fn a_soft_heavily_damped_grip_is_sized() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (k, b) = (1500.0, 25.0);
+    let g = generate_hidden(
+        Hidden::grip(k, b),
+        1,
+        &Design::SHARED,
+        &tmp.path().join("out"),
+    )
+    .unwrap();
+    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
+    assert_eq!(names, ["grip-compliance"], "{:?}", d.causes);
+    let c = &d.causes[0];
+    let (found_k, found_b) = (
+        c.parameters["stiffness_n_per_m"],
+        c.parameters["damping_n_s_per_m"],
+    );
+    println!("{found_k:.0} N/m, {found_b:.1} N s/m, gain {:.3}", c.gain);
+    assert!(
+        (found_k / k - 1.0).abs() < 0.2,
+        "stiffness {found_k:.0} for {k}"
+    );
+    assert!(
+        (found_b / b - 1.0).abs() < 0.3,
+        "damping {found_b:.1} for {b}"
+    );
+    assert!(c.gain >= 0.5, "gain {}", c.gain);
+    assert!(d.unexplained.is_none() && d.hand_unexplained.is_none());
+}
+
 #[test]
 fn hidden_handle_mass_is_found() {
     check("handle-mass", 1003);
 }
 
-/// The requirements in full (README § Requirements: named, each parameter within 20 %,
-/// held-out gain at least 50 %) for a reflex, on a session laid out to measure one
-/// ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N), under the arm's motor noise.
-/// Seed 1000 is the sweep's first, not a chosen one: over the sweep's 20 realistic
-/// sessions so laid out (the generator's nuisances on), 20 are named, 19 with both
-/// parameters within 20 % and 19 reach a held-out gain of 50 % (0.48–0.75); all three
-/// hold on 18 (with the references at the trial's pace; 16 before). On the shared layout (24 pulses of
-/// 150 ms) the gain reaches 50 % on 1 of 20: see
-/// `hidden_stretch_reflex_is_named_under_motor_noise`. The layout pins the delay: the
-/// range of delays its folds cannot tell from the best holds the hidden one and lies
-/// within ±20 % of the found one (34.5–36.5 ms for 35 here).
 /// A subject whose arm is heavier than the tables the diagnosis takes it from (every
 /// segment's mass and moment of inertia 15 % more; a manifest cannot say so) is not a
 /// cause. On the shared layout's long pulses it reads as a heavier handle (0.18 kg on
@@ -359,6 +391,17 @@ fn the_arms_inertia_follows_the_body_mass() {
     assert!((with - 1.0).abs() < 0.04, "with it ×{with:.3}");
 }
 
+/// The requirements in full (README § Requirements: named, each parameter within 20 %,
+/// held-out gain at least 50 %) for a reflex, on a session laid out to measure one
+/// ([`Design::reflex_study`]: 72 pulses of 50 ms, 30 N), under the arm's motor noise.
+/// Seed 1000 is the sweep's first, not a chosen one: over the sweep's 20 realistic
+/// sessions so laid out (the generator's nuisances on), 20 are named, 19 with both
+/// parameters within 20 % and 19 reach a held-out gain of 50 % (0.48–0.75); all three
+/// hold on 18 (with the references at the trial's pace; 16 before). On the shared layout (24 pulses of
+/// 150 ms) the gain reaches 50 % on 1 of 20: see
+/// `hidden_stretch_reflex_is_named_under_motor_noise`. The layout pins the delay: the
+/// range of delays its folds cannot tell from the best holds the hidden one and lies
+/// within ±20 % of the found one (34.5–36.5 ms for 35 here).
 #[test]
 fn hidden_stretch_reflex_is_found() {
     let (g, d) = check_design("stretch-reflex", 1000, &Design::reflex_study(), 0.5);

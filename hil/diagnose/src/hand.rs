@@ -114,14 +114,18 @@ pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
 /// `hil/docs/notes/2026-12-04-grip-load-profile.md`).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 81);
 /// Grip time constants `b/k` searched, s: `(first, last, count)`, a log grid from 1 to
-/// 10 ms, 19 values 13.6 % apart (a grasp through skin and soft tissue: a few kN/m with
-/// tens of N s/m). On a reflex study's brief pulses the grip's damping shows, and the
+/// 40 ms, 31 values 13.1 % apart (a grasp through skin and soft tissue: a few kN/m with
+/// 5–30 N s/m, so a soft grip's time constant reaches tens of ms). A time constant
+/// beyond the grid is taken up by the stiffness: a 1.5 kN/m grip with 25 N s/m (17 ms)
+/// came out 33–41 % stiff with the grid ending at 10 ms (`hil/sweeps/grip-soft.toml`).
+/// On a reflex study's brief pulses the grip's damping shows, and the
 /// misfit a coarser grid leaves is structure the hand's library reports and a later
 /// round's candidate takes up: with 7 values about 1.5× apart, 4 of 12 sessions hiding a
 /// grip alone reported a velocity-squared damping as `hand_unexplained`, and 3 of 12
 /// hiding a grip and a heavier handle named a stretch reflex as a third cause (none and 1
-/// with this grid; `hil/docs/notes/2026-12-04-grip-time-grid.md`).
-pub const GRIP_TIME_S: (f64, f64, usize) = (1e-3, 1e-2, 19);
+/// with a grid 13.6 % apart; `hil/docs/notes/2026-12-04-grip-time-grid.md`,
+/// `hil/docs/notes/2026-12-05-soft-grips.md`).
+pub const GRIP_TIME_S: (f64, f64, usize) = (1e-3, 4e-2, 31);
 /// Correlation time of the residual the hand balance whitens in time, s ([`Whitening`]).
 /// The residual of a correct model is the arm's motor noise, a leaky Brownian motion in
 /// the activations (000_* section 4; the project's arm uses τ = 50 ms), and the
@@ -902,7 +906,7 @@ pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
 }
 
 /// Every other stiffness and every third time constant of the grip's grids (from the
-/// first of each, which keeps both ends: 41 × 7 settings, 24 % and 47 % apart): a coarse
+/// first of each, which keeps both ends: 41 × 11 settings, 24 % and 45 % apart): a coarse
 /// search that finds the valley the full grids refine.
 pub(crate) fn grip_coarse_settings() -> impl Iterator<Item = usize> {
     let times = GRIP_TIME_S.2;
@@ -1549,7 +1553,7 @@ mod tests {
         assert!(moved > 1e-7, "the load moved the hand by at most {moved} m");
     }
 
-    /// A response made exactly of a grip (3155 N/m, τ 5.3 ms: a point of the grid) and a
+    /// A response made exactly of a grip (3155 N/m, τ 4.9 ms: a point of the grid) and a
     /// 0.43 kg handle mass on the handle's side of it: the hand moves by two
     /// incommensurate motions per axis, the arm's law gives the force on it, the handle
     /// trails it through the spring (the same filter [`Kin::grip`] integrates), and the
