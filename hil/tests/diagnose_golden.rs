@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "e557f5aa1d367d53f6244165dd717a39c59c469cc80ddef137cac4ca0717b5e9",
+        "bc414f179a5f8f924b271cab5585f8ea9f439083ba737e17490d86c383548ce3",
     ),
     (
         "example-friction",
-        "9134aa47bd6d5abc63950339b3c6c458100edfe29b6f8f9faf09626c8f2de89f",
+        "2cb9a227b7819b9a4337e3eb27346d20347e3c27bdfde030a689b08e3fa1415c",
     ),
     (
         "example-nuisance",
-        "a08963db8e813488722513ca7f1da8dfd1d073f3f31c1a9d9d44447ef64c0b5e",
+        "3607f6d68bdde14db28eb2daafa1c37f05dd602b884d4d3374d54af4be6ee9c8",
     ),
     (
         "example-rotation-mass",
-        "c007bd6e1968ee5bc2578b1aa6b402c308484c9614616328e81534ebd295c5f1",
+        "d134023384c4fd8813641dfd243f5b01a383b5842ee9c48a067ecae5627df998",
     ),
 ];
 

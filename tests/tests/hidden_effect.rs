@@ -274,12 +274,13 @@ fn a_grips_searched_range_holds_the_stiffness_it_reports() {
 
 /// A soft grip with heavy damping, beyond the generator's drawn range (2–6 kN/m,
 /// τ 2–6 ms): 1500 N/m with 25 N s/m, a time constant of 17 ms. With the grip's time
-/// constants searched up to 10 ms the stiffness came out 1991–2108 N/m on this subject and
-/// five others (33–41 % high: the spring took up the damping the grid could not reach)
-/// and half of them reported `hand_unexplained`; searched up to 40 ms, 1493–1675
-/// (`hil/sweeps/grip-soft.toml`). Asserted: the grip alone is named, its stiffness within
-/// 20 %, its damping within 30 % (a time constant on a grid 13 % apart, traded against
-/// the stiffness), a held-out gain of 50 %, nothing unexplained.
+/// constants searched up to 10 ms the stiffness came out 1991 N/m here (19.9 N s/m), and
+/// 1991–2108 N/m on the six subjects of `hil/sweeps/grip-soft.toml` (33–41 % high: the
+/// spring took up the damping the grid could not reach), half of which reported
+/// `hand_unexplained`; searched up to 46 ms, 1581 N/m here and 1493–1675 there.
+/// Asserted: the grip alone is named, its stiffness within 20 %, its damping within 30 %
+/// (a time constant on a grid 13.6 % apart, traded against the stiffness), a held-out
+/// gain of 50 %, nothing unexplained.
 #[test]
 fn a_soft_heavily_damped_grip_is_sized() {
     let tmp = tempfile::tempdir().unwrap();
@@ -434,6 +435,32 @@ fn reflex_delay_range(g: &Generated, d: &Diagnosis) -> ([f64; 2], f64, f64) {
 #[test]
 fn reflex_study_hiding_nothing_names_nothing() {
     check_design("none", 1000, &Design::reflex_study(), 0.5);
+}
+
+/// A reflex study's session hiding nothing whose hand balance a weak reflex fits
+/// (seed 1002 of the sweep: 41 N s/m at 21 ms, t 3.4 on the repetitions, a held-out gain
+/// of 11 %, above the reflex's 25 N s/m floor). Such a reflex makes at most 0.15 N in
+/// one pulse's response, below the rig's 0.25 N force resolution, where the reflexes
+/// the generator hides (100–250 N s/m) make 0.5–0.8 N: it is rejected as immaterial and
+/// nothing is named.
+#[test]
+fn a_reflex_study_hiding_nothing_names_no_weak_reflex() {
+    let (_, d) = run_design("none", 1002, &Design::reflex_study());
+    assert!(d.causes.is_empty(), "named {:?}", d.causes);
+    let reflex = d
+        .ranking
+        .iter()
+        .find(|r| r.name == "stretch-reflex")
+        .unwrap();
+    println!("{:?} {:?}", reflex.parameters, reflex.rejected);
+    assert!(
+        reflex
+            .rejected
+            .iter()
+            .any(|w| w.contains("the reflex makes at most")),
+        "{:?}",
+        reflex.rejected
+    );
 }
 
 /// A human-side cause's report: `diagnosis.md` with the cause's figure, the held-out

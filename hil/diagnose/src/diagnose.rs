@@ -1935,6 +1935,15 @@ impl HandJudge<'_> {
             rejected.push("unphysical: a negative mass or reflex gain".to_string());
         }
         rejected.extend(immaterial(c.kind(), &parameters, self.scale, 0.0));
+        if c.kind() == Some(EffectKind::StretchReflex) {
+            let (g, delay_ms) = (parameters["gain"], parameters["delay_ms"]);
+            let peak = h.reflex_peak_force_n(g, delay_ms * 1e-3);
+            if peak.is_nan() || peak < FORCE_RESOLUTION_N {
+                rejected.push(format!(
+                    "immaterial: the reflex makes at most {peak:.3} N in one pulse's response, below the rig's {FORCE_RESOLUTION_N} N"
+                ));
+            }
+        }
         rejected.extend(at_edge(
             c.kind(),
             c.setting(fit.setting),

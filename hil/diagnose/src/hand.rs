@@ -114,10 +114,14 @@ pub const REFLEX_DELAY_MS: (f64, f64, f64) = (10.0, 50.0, 1.0);
 /// `hil/docs/notes/2026-12-04-grip-load-profile.md`).
 pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 81);
 /// Grip time constants `b/k` searched, s: `(first, last, count)`, a log grid from 1 to
-/// 40 ms, 31 values 13.1 % apart (a grasp through skin and soft tissue: a few kN/m with
+/// 46 ms, 31 values 13.6 % apart, `10^(i/18)` ms: the 19 values of the former 1–10 ms
+/// grid and 12 more beyond it (a grasp through skin and soft tissue: a few kN/m with
 /// 5–30 N s/m, so a soft grip's time constant reaches tens of ms). A time constant
 /// beyond the grid is taken up by the stiffness: a 1.5 kN/m grip with 25 N s/m (17 ms)
 /// came out 33–41 % stiff with the grid ending at 10 ms (`hil/sweeps/grip-soft.toml`).
+/// Extended rather than re-spaced: a grid 13.1 % apart over 1–40 ms moved a stiff grip
+/// behind a heavier handle along their ridge (seed 3003 of a reflex study's: the mass
+/// 22 % high).
 /// On a reflex study's brief pulses the grip's damping shows, and the
 /// misfit a coarser grid leaves is structure the hand's library reports and a later
 /// round's candidate takes up: with 7 values about 1.5× apart, 4 of 12 sessions hiding a
@@ -125,7 +129,7 @@ pub const GRIP_STIFFNESS_N_PER_M: (f64, f64, usize) = (500.0, 50_000.0, 81);
 /// hiding a grip and a heavier handle named a stretch reflex as a third cause (none and 1
 /// with a grid 13.6 % apart; `hil/docs/notes/2026-12-04-grip-time-grid.md`,
 /// `hil/docs/notes/2026-12-05-soft-grips.md`).
-pub const GRIP_TIME_S: (f64, f64, usize) = (1e-3, 4e-2, 31);
+pub const GRIP_TIME_S: (f64, f64, usize) = (1e-3, 4.641_588_833_612_779e-2, 31);
 /// Correlation time of the residual the hand balance whitens in time, s ([`Whitening`]).
 /// The residual of a correct model is the arm's motor noise, a leaky Brownian motion in
 /// the activations (000_* section 4; the project's arm uses τ = 50 ms), and the
@@ -1049,6 +1053,26 @@ impl HandJudgement {
             ),
         ]
     }
+
+    /// The largest force a reflex of `gain_n_s_per_m` after `delay_s` makes over the
+    /// units ([`Self::responses`], one pulse's response each), N: `|g (S Δv_h(t − δ))|`
+    /// on either axis at any evaluated row, the hand moving with the handle. NaN for a
+    /// gain that is not a number.
+    #[must_use]
+    pub fn reflex_peak_force_n(&self, gain_n_s_per_m: f64, delay_s: f64) -> f64 {
+        if !gain_n_s_per_m.is_finite() {
+            return f64::NAN;
+        }
+        let mut peak = 0.0_f64;
+        for r in &self.responses {
+            let l = lag(r, delay_s);
+            for &j in &r.rows {
+                let v = Vector2::new(lagged(&r.dv[0], j, l), lagged(&r.dv[1], j, l));
+                peak = peak.max((r.s[j] * v).amax() * gain_n_s_per_m.abs());
+            }
+        }
+        peak
+    }
 }
 
 /// The hand balance's candidate for a catalog effect (`None` for the cart balance's):
@@ -1553,7 +1577,7 @@ mod tests {
         assert!(moved > 1e-7, "the load moved the hand by at most {moved} m");
     }
 
-    /// A response made exactly of a grip (3155 N/m, τ 4.9 ms: a point of the grid) and a
+    /// A response made exactly of a grip (3155 N/m, τ 5.3 ms: a point of the grid) and a
     /// 0.43 kg handle mass on the handle's side of it: the hand moves by two
     /// incommensurate motions per axis, the arm's law gives the force on it, the handle
     /// trails it through the spring (the same filter [`Kin::grip`] integrates), and the
