@@ -910,7 +910,7 @@ pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
 }
 
 /// Every other stiffness and every third time constant of the grip's grids (from the
-/// first of each, which keeps both ends: 41 × 11 settings, 24 % and 45 % apart): a coarse
+/// first of each, which keeps both ends: 41 × 11 settings, 24 % and 47 % apart): a coarse
 /// search that finds the valley the full grids refine.
 pub(crate) fn grip_coarse_settings() -> impl Iterator<Item = usize> {
     let times = GRIP_TIME_S.2;
