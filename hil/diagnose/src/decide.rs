@@ -13,7 +13,7 @@
 //! | `actuation-delay` | at least one 4 kHz tick (0.25 ms) beyond the nominal latency |
 //! | `handle-mass` | `m a_max ≥ 0.25 N` at the session's largest cart acceleration |
 //! | `grip-compliance` | the grip stretches `≥ 0.25 mm` under the session's largest sensor force |
-//! | `stretch-reflex` | gain `≥ 25 N s/m` (a tenth of the muscles' own damping, 100–300 N s/m), and its force `g S Δv(t − δ)` `≥ 0.25 N` somewhere in one pulse's response (`HandJudgement::reflex_peak_force_n`) |
+//! | `stretch-reflex` | gain `≥ 25 N s/m` (a tenth of the muscles' own damping, 100–300 N s/m), and its force `g S Δv(t − δ)` `≥ 0.25 N` somewhere in one pulse's response (`HandCandidate::peak_force_n`) |
 //!
 //! **Inside its range.** A parameter found at the first or last point of its grid (a
 //! ripple pitch at 5 or 100 mm, an angle at ±45°, a reflex delay at 10 or 50 ms, a grip

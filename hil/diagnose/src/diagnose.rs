@@ -78,7 +78,7 @@ use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
 use super::hand::{
-    ARM_INERTIA_TOLERANCE, ArmInertia, HandCandidate, HandJudgement, ReplicateTest,
+    ARM_INERTIA_TOLERANCE, ArmInertia, HandCandidate, HandJudgement, ReplicateTest, StretchReflex,
     baseline_parameters, hand_candidate, hand_fit_rows, judge_hand,
 };
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
@@ -1936,8 +1936,11 @@ impl HandJudge<'_> {
         }
         rejected.extend(immaterial(c.kind(), &parameters, self.scale, 0.0));
         if c.kind() == Some(EffectKind::StretchReflex) {
-            let (g, delay_ms) = (parameters["gain"], parameters["delay_ms"]);
-            let peak = h.reflex_peak_force_n(g, delay_ms * 1e-3);
+            // The reflex's own law, also where `c` is a joint (`fit.setting` is the
+            // reflex's setting there too).
+            let [px, py] =
+                StretchReflex.peak_force_n(&[parameters["gain"]], fit.setting, &h.responses);
+            let peak = px.max(py);
             if peak.is_nan() || peak < FORCE_RESOLUTION_N {
                 rejected.push(format!(
                     "immaterial: the reflex makes at most {peak:.3} N in one pulse's response, below the rig's {FORCE_RESOLUTION_N} N"
@@ -2235,7 +2238,7 @@ fn hand_outside_the_catalog(
                 let base = later.as_ref().unwrap_or(&start);
                 let (mut r, joint, fit) = hand_joint_row(judge, &members, Arc::new(t), base)?;
                 reject_immaterial_term(&mut r, |c| {
-                    Ok(t.peak_force_n(c, fit.fit.setting, &h.responses))
+                    Ok(t.peak_force_n(&c[..t.extra_columns()], fit.fit.setting, &h.responses))
                 })?;
                 Ok((r, t, joint, fit.fit))
             })

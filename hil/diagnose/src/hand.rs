@@ -345,6 +345,29 @@ pub trait HandCandidate: Sync + Send {
     fn bounds(&self) -> Vec<(usize, f64, f64)> {
         Vec::new()
     }
+    /// The largest force the effect's own regressors ([`Self::extra`]) make with
+    /// coefficients `coef` (one per [`Self::extra_columns`]) at setting `s` over the units
+    /// `responses` (one pulse's response each), N, per axis: `|Σ coef_i extra_i|` at any
+    /// evaluated row, the hand moving with the handle. NaN for a coefficient that is not
+    /// a number. What decides whether a fitted law is material in the rig's units.
+    fn peak_force_n(&self, coef: &[f64], s: usize, responses: &[HandResponse]) -> [f64; 2] {
+        if coef.iter().any(|c| !c.is_finite()) {
+            return [f64::NAN; 2];
+        }
+        let mut out = vec![0.0; self.extra_columns()];
+        let mut peak = [0.0_f64; 2];
+        for r in responses {
+            let kin = Kin::rigid(r);
+            for &j in &r.rows {
+                for (axis, p) in peak.iter_mut().enumerate() {
+                    self.extra(r, &kin, s, axis, j, &mut out);
+                    let f: f64 = coef.iter().zip(&out).map(|(c, x)| c * x).sum();
+                    *p = p.max(f.abs());
+                }
+            }
+        }
+        peak
+    }
 }
 
 /// The rows of an effect's candidate: the baseline's on the effect's kinematics
@@ -1052,26 +1075,6 @@ impl HandJudgement {
                 endpoint[(1, 1)],
             ),
         ]
-    }
-
-    /// The largest force a reflex of `gain_n_s_per_m` after `delay_s` makes over the
-    /// units ([`Self::responses`], one pulse's response each), N: `|g (S Δv_h(t − δ))|`
-    /// on either axis at any evaluated row, the hand moving with the handle. NaN for a
-    /// gain that is not a number.
-    #[must_use]
-    pub fn reflex_peak_force_n(&self, gain_n_s_per_m: f64, delay_s: f64) -> f64 {
-        if !gain_n_s_per_m.is_finite() {
-            return f64::NAN;
-        }
-        let mut peak = 0.0_f64;
-        for r in &self.responses {
-            let l = lag(r, delay_s);
-            for &j in &r.rows {
-                let v = Vector2::new(lagged(&r.dv[0], j, l), lagged(&r.dv[1], j, l));
-                peak = peak.max((r.s[j] * v).amax() * gain_n_s_per_m.abs());
-            }
-        }
-        peak
     }
 }
 

@@ -162,25 +162,6 @@ impl HandTerm {
             }
         }
     }
-
-    /// The largest force the term makes over the units `responses` (handle kinematics),
-    /// N, per axis, with coefficients `coef` and setting `s`.
-    #[must_use]
-    pub fn peak_force_n(self, coef: [f64; 2], s: usize, responses: &[HandResponse]) -> [f64; 2] {
-        if coef.iter().any(|c| !c.is_finite()) {
-            return [f64::NAN; 2];
-        }
-        let mut peak = [0.0_f64; 2];
-        for r in responses {
-            let kin = Kin::rigid(r);
-            for &j in &r.rows {
-                for (axis, p) in peak.iter_mut().enumerate() {
-                    *p = p.max((coef[axis] * self.value(r, &kin, s, axis, j)).abs());
-                }
-            }
-        }
-        peak
-    }
 }
 
 impl HandCandidate for HandTerm {
