@@ -21,6 +21,13 @@
 //! fit something else; it is not named. A friction knee at the sharpest setting is the
 //! sign-function limit of the law, not an edge.
 //!
+//! **Not leaning on the motor gains' bound.** The nominal balance holds each motor's
+//! force gain within a force constant's ±10 % ([`MOTOR_GAIN_TOLERANCE`]). A candidate
+//! whose fit sits at that bound is judged again with the gains at their nominal values
+//! in its fit and its base's alike, and must pass the t-test and the gain floor there
+//! too ([`at_gain_bound`]): on reaches without pulses a viscous friction and the gains
+//! trade through the admittance, and what such a fit gains is the command's scale.
+//!
 //! **Its own evidence.** For the effects that are a function of the carts' state
 //! (friction of the velocity, ripple of the position), the *partial residual* (the
 //! candidate's held-out-fitted residual plus the effect's own fitted force) is averaged
@@ -29,7 +36,7 @@
 //! residual's variance across bins. A 0.18 N "ripple" of 75 mm pitch fitted to a slow
 //! trend fails it (the bins are flat where the sine swings).
 
-use super::candidate::Candidate;
+use super::candidate::{Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS};
 use super::effect::EffectKind;
 use super::error::DiscrepancyError;
 use super::signals::BalanceSignals;
@@ -234,6 +241,43 @@ pub fn at_edge(
     }
 }
 
+/// Why a cart-balance fit with coefficients `beta` and the Gram's `bounds` leans on
+/// the motor gains' bound (empty when neither force gain sits at it, or the design
+/// bounds none: a rig without a force sensor).
+///
+/// The bound ([`MOTOR_GAIN_TOLERANCE`]) keeps the command's scale from taking up an
+/// effect; a fit that sits at it wants more scale than a force constant has, and what
+/// the candidate's own columns then gain is that scale, not their law. Without a
+/// perturbation the admittance makes the carts' velocity `(F − M a − ε)/D`, so a
+/// viscous friction `b v` beside a motor gain `γ` with `b = γ D` is the mass and
+/// `γ (u + D v − (m − M) a)`, which observes the current loop's noise the command
+/// answers (`ε` the admittance's tracking error): on reaches without pulses a
+/// friction of `D` times the bound, 1.4–1.6 N s/m at `D` = 15 N s/m, came out with
+/// both gains at +10 %, and a held-out gain of 5 %. A real friction's fit leaves the
+/// gains near their nominal values (the shared `example-friction`: 0.1 %).
+#[must_use]
+pub fn at_gain_bound(beta: &[f64], bounds: &[(usize, f64, f64)]) -> Vec<String> {
+    let at: Vec<String> = bounds
+        .iter()
+        .filter_map(|&(col, lo, hi)| {
+            let g = *beta.get(col)?;
+            let edge = 1e-9 * (hi - lo);
+            (g <= lo + edge || g >= hi - edge).then(|| {
+                let axis = ["x", "y"][(col + NUISANCE_COLUMNS).saturating_sub(beta.len()).min(1)];
+                format!("{axis} at {:+.0} %", 100.0 * g)
+            })
+        })
+        .collect();
+    if at.is_empty() {
+        return Vec::new();
+    }
+    vec![format!(
+        "it leans on the motor gains' bound of ±{:.0} % ({}): what it gains is the command's scale beyond a force constant's tolerance, not its own law",
+        100.0 * MOTOR_GAIN_TOLERANCE,
+        at.join(", ")
+    )]
+}
+
 /// `R²` of the fitted law against the binned partial residual, for a candidate whose
 /// effect is a function of the carts' state (`None` for the others, or with too few
 /// filled bins): friction against velocity, ripple against position, both axes pooled.
@@ -308,4 +352,25 @@ pub fn evidence_r2(
     let ss_tot: f64 = filled.iter().map(|b| b.2 * (b.0 - mean).powi(2)).sum();
     let ss_res: f64 = filled.iter().map(|b| b.2 * (b.0 - b.1).powi(2)).sum();
     Ok((ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::candidate::gain_bounds;
+
+    /// The masses, one own column, then the two gains: only a gain at ±10 % is the
+    /// bound (within a part in 10⁹ of the bound's width, as the box solver returns it),
+    /// named by its axis; a design without bounds (no force sensor) has none.
+    #[test]
+    fn a_gain_at_its_bound_is_named_by_axis() {
+        let bounds = gain_bounds(5);
+        assert!(at_gain_bound(&[9.0, 3.0, 1.5, 0.02, -0.099_999], &bounds).is_empty());
+        let why = at_gain_bound(&[9.0, 3.0, 1.5, 0.02, -0.1], &bounds);
+        assert_eq!(why.len(), 1);
+        assert!(why[0].contains("(y at -10 %)"), "{why:?}");
+        let why = at_gain_bound(&[9.0, 3.0, 1.5, 0.1, 0.1], &bounds);
+        assert!(why[0].contains("(x at +10 %, y at +10 %)"), "{why:?}");
+        assert!(at_gain_bound(&[9.0, 3.0, 1.5, 0.1, 0.1], &[]).is_empty());
+    }
 }

@@ -70,7 +70,8 @@ use super::bands::{BANDS_HZ, band_power};
 use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
-    FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, evidence_r2, immaterial,
+    FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
+    immaterial,
 };
 use super::delay::ActuationDelay;
 use super::effect::{Effect, EffectKind};
@@ -602,7 +603,10 @@ impl Cause {
 #[derive(Clone, Copy)]
 struct Judge<'a> {
     base: &'a CvFit,
+    /// The model `base` is the fit of (the nominal balance, or the effects given).
+    base_design: &'a dyn Candidate,
     base_nrmse: f64,
+    folds: &'a Folds,
     t_critical: f64,
     min_gain: f64,
     scale: &'a SessionScale,
@@ -611,6 +615,44 @@ struct Judge<'a> {
 }
 
 impl Judge<'_> {
+    /// The same rules against `base`, the fit of `design`.
+    fn given<'b>(&'b self, base: &'b CvFit, design: &'b dyn Candidate) -> Judge<'b> {
+        Judge {
+            base,
+            base_design: design,
+            base_nrmse: base.nrmse(),
+            ..*self
+        }
+    }
+
+    /// Held-out gain and t of `c` at setting `s` against the base, with the motor
+    /// gains of both fits held at their nominal values (`γ = 0`).
+    fn at_nominal_gains(
+        &self,
+        c: &dyn Candidate,
+        s: usize,
+    ) -> Result<(f64, f64), DiscrepancyError> {
+        let lat = self.latency_s;
+        let nominal = |d: &dyn Candidate, s: usize| -> Result<Vec<Vec<Gram>>, DiscrepancyError> {
+            self.signals
+                .par_iter()
+                .map(|sig| {
+                    let mut g = d.design(sig, s, lat)?.gram(sig);
+                    g.bounds.iter_mut().for_each(|b| (b.1, b.2) = (0.0, 0.0));
+                    Ok(vec![g])
+                })
+                .collect()
+        };
+        let fit = cross_validate(&nominal(c, s)?, self.folds, c.name())?;
+        let base = cross_validate(
+            &nominal(self.base_design, 0)?,
+            self.folds,
+            "the base at nominal motor gains",
+        )?;
+        let (_, gain, _, t) = fold_stats(&fit, &base, base.nrmse());
+        Ok((gain, t))
+    }
+
     /// The candidate's row of the ranking: statistics, parameters, and the physical
     /// checks (the evidence check only for candidates that pass the statistical ones:
     /// it re-forms every trial's residual).
@@ -641,6 +683,18 @@ impl Judge<'_> {
         let (at, of) = c.search_position(s);
         rejected.extend(at_edge(c.kind(), c.setting(s), at, of));
         let mut significant = t > self.t_critical && gain >= self.min_gain;
+        // A fit at the motor gains' bound must stand without them.
+        if significant && rejected.is_empty() {
+            for why in at_gain_bound(&fit.beta, &fit.gram.bounds) {
+                let (g0, t0) = self.at_nominal_gains(c, s)?;
+                if t0 <= self.t_critical || g0 < self.min_gain {
+                    rejected.push(format!(
+                        "{why}; with the force gains at their nominal values it gains {:.1} % (t = {t0:.1})",
+                        100.0 * g0
+                    ));
+                }
+            }
+        }
         let mut r2 = None;
         if significant {
             r2 = evidence_r2(c, s, &fit.beta, self.signals, lat)?;
@@ -711,11 +765,8 @@ fn forward_select(
             folds,
             "the named effects",
         )?;
-        let cond = Judge {
-            base: &base,
-            base_nrmse: base.nrmse(),
-            ..*judge
-        };
+        let named = Joint::given(chosen.clone());
+        let cond = judge.given(&base, &named);
         let mut round: Vec<(Ranked, Joint, CvFit)> = rest
             .into_par_iter()
             .map(|c| {
@@ -800,11 +851,8 @@ fn outside_the_catalog(
                 folds,
                 "the library's terms",
             )?;
-            let cond = Judge {
-                base: &base,
-                base_nrmse: base.nrmse(),
-                ..*judge
-            };
+            let terms = Joint::given(tm.clone());
+            let cond = judge.given(&base, &terms);
             let given: Vec<String> = tm.iter().map(|(t, _)| t.name().to_string()).collect();
             let hint = hint_of(&from_base.found(lat));
             let mut keep = Vec::new();
@@ -1037,11 +1085,8 @@ fn select_terms(
     let mut members = start.to_vec();
     let mut base = start_fit;
     for _ in 0..MAX_TERMS {
-        let cond = Judge {
-            base: &base,
-            base_nrmse: base.nrmse(),
-            ..*judge
-        };
+        let so_far = Joint::given(members.clone());
+        let cond = judge.given(&base, &so_far);
         let given: Vec<String> = members.iter().map(|(c, _)| c.name().to_string()).collect();
         let mut round: Vec<(Ranked, Term, Joint, CvFit)> = LIBRARY
             .into_par_iter()
@@ -1621,7 +1666,9 @@ fn judge_cart(
     let t_critical = student_t_critical(alpha_each, df as f64);
     let judge = Judge {
         base: &baseline,
+        base_design: &Baseline,
         base_nrmse,
+        folds: &folds,
         t_critical,
         min_gain: opts.min_gain,
         scale,
