@@ -9,10 +9,11 @@
 //! `b` and `e` the baseline's and the extended model's held-out NRMSE and `f` the
 //! baseline's on the same seed's session hiding nothing (the same subject, nuisances and
 //! noise: the generator's seed sets them whatever is hidden). Measured on seeds
-//! 1000–1009 with the motor gains bounded: 0.90–1.43 (the extended model reaches the
-//! floor; 1.43 where the 0.75 ms delay adds little over it; 0.90–1.45 with free gains),
-//! held-out gains 0.12–0.42; `sweep_delay_gain` prints the
-//! gains. How the delay became identifiable at all (the balance filter, the
+//! 1000–1019 with the motor gains bounded: 0.90–1.43, at least 0.8 on all 20 (the
+//! extended model reaches the floor; 1.40–1.43 where the 0.75 ms delay adds little over
+//! it; 0.90–1.45 with free gains on 1000–1009), held-out gains 0.12–0.44;
+//! `sweep_delay_gain` prints the gains (`PLANT_SEEDS=1000,…,1019
+//! PLANT_EFFECTS=actuation-delay,none`). How the delay became identifiable at all (the balance filter, the
 //! one-tick nominal latency) is in `hil/diagnose/src/signals.rs`.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
@@ -73,7 +74,7 @@ fn report(effect: &str, seed: u64, h: &Hidden, d: &Diagnosis) {
 /// Seed 1003 hides 1.25 ms. Asserted: the cause, the delay within 20 % (README
 /// § Requirements; the world rounds it to whole 0.25 ms ticks, the grid is 25 µs) and at
 /// least 80 % of the excess over the rig's floor removed (module docs; measured 1.03
-/// here, 0.90–1.43 on seeds 1000–1009; a model that only named the delay would leave it).
+/// here, 0.90–1.43 on seeds 1000–1019; a model that only named the delay would leave it).
 #[test]
 fn hidden_delay_removes_the_excess_over_the_floor() {
     let (h, d) = run("actuation-delay", 1003, None);

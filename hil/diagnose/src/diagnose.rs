@@ -684,15 +684,16 @@ impl Judge<'_> {
         rejected.extend(at_edge(c.kind(), c.setting(s), at, of));
         let mut significant = t > self.t_critical && gain >= self.min_gain;
         // A fit at the motor gains' bound must stand without them.
-        if significant && rejected.is_empty() {
-            for why in at_gain_bound(&fit.beta, &fit.gram.bounds) {
-                let (g0, t0) = self.at_nominal_gains(c, s)?;
-                if t0 <= self.t_critical || g0 < self.min_gain {
-                    rejected.push(format!(
+        let bound = at_gain_bound(&fit.beta, &fit.gram.bounds);
+        if significant && rejected.is_empty() && !bound.is_empty() {
+            let (g0, t0) = self.at_nominal_gains(c, s)?;
+            if t0 <= self.t_critical || g0 < self.min_gain {
+                rejected.extend(bound.iter().map(|why| {
+                    format!(
                         "{why}; with the force gains at their nominal values it gains {:.1} % (t = {t0:.1})",
                         100.0 * g0
-                    ));
-                }
+                    )
+                }));
             }
         }
         let mut r2 = None;
