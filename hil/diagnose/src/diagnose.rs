@@ -1995,12 +1995,8 @@ impl HandJudge<'_> {
                 ));
             }
         }
-        rejected.extend(at_edge(
-            c.kind(),
-            c.setting(fit.setting),
-            fit.setting,
-            c.settings(),
-        ));
+        let (at, of) = c.search_position(fit.setting);
+        rejected.extend(at_edge(c.kind(), c.setting(fit.setting), at, of));
         Ranked {
             name: c.name().to_string(),
             kind: c.kind(),

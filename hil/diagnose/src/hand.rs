@@ -307,6 +307,13 @@ pub trait HandCandidate: Sync + Send {
     fn settings(&self) -> usize;
     /// The nonlinear parameter's name (with unit) and value at setting `s`.
     fn setting(&self, s: usize) -> (&'static str, f64);
+    /// Where setting `s` lies on the search's range of the parameter [`Self::setting`]
+    /// names, and how many values that range has (for the edge rule,
+    /// `decide::at_edge`): the setting itself unless the search crosses its parameter
+    /// with another (the grip's stiffness with its time constant).
+    fn search_position(&self, s: usize) -> (usize, usize) {
+        (s, self.settings())
+    }
     /// Regressors (the baseline's first).
     fn columns(&self) -> usize;
     /// Visits the rows of `r` at setting `s` with feedback delay `fb_delay_s`.
@@ -951,6 +958,11 @@ impl HandCandidate for GripCompliance {
     }
     fn setting(&self, s: usize) -> (&'static str, f64) {
         ("stiffness_n_per_m", grip_setting(s).0)
+    }
+    /// The stiffness's place on its grid: at 0.5 or 50 kN/m it is at the edge whatever
+    /// the time constant.
+    fn search_position(&self, s: usize) -> (usize, usize) {
+        (s / GRIP_TIME_S.2, GRIP_STIFFNESS_N_PER_M.2)
     }
     fn columns(&self) -> usize {
         base_columns()
@@ -1782,5 +1794,27 @@ mod tests {
                 kin.x[0][i]
             );
         }
+    }
+
+    /// The grip's edge rule reads its stiffness's place on the stiffness grid, not the
+    /// combined setting: 50 kN/m (the grid's last) with a mid time constant is at the
+    /// edge, as is 0.5 kN/m; 5 kN/m with the last time constant is not (a stiffness a
+    /// masked pair named at 50 kN/m on 1 s reaches hiding nothing passed the rule before).
+    #[test]
+    fn a_grip_at_the_stiffness_grids_end_is_at_the_edge() {
+        let times = GRIP_TIME_S.2;
+        let ks = GRIP_STIFFNESS_N_PER_M.2;
+        let grip = GripCompliance;
+        let last_k_mid_tau = (ks - 1) * times + times / 2;
+        assert_eq!(grip.setting(last_k_mid_tau).1, 50_000.0);
+        let edge = |s: usize| {
+            let (at, of) = grip.search_position(s);
+            !crate::decide::at_edge(grip.kind(), grip.setting(s), at, of).is_empty()
+        };
+        assert!(edge(last_k_mid_tau));
+        assert!(edge(times / 2), "0.5 kN/m");
+        let mid_k_last_tau = (ks / 2) * times + times - 1;
+        assert!((grip.setting(mid_k_last_tau).1 - 5_000.0).abs() < 1.0);
+        assert!(!edge(mid_k_last_tau));
     }
 }

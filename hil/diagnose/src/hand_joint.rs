@@ -149,6 +149,9 @@ impl HandCandidate for HandJoint {
     fn setting(&self, s: usize) -> (&'static str, f64) {
         self.next.setting(s)
     }
+    fn search_position(&self, s: usize) -> (usize, usize) {
+        self.next.search_position(s)
+    }
     fn columns(&self) -> usize {
         base_columns()
             + self
