@@ -7,6 +7,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- stretch-reflex 7 /tmp/s --repetitions 9 --pulse 0.05,30
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/i --ideal
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/h --arm-inertia-scale 1.15
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/f --movement 1.0
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -19,14 +20,15 @@
 //! `--repetitions 9 --pulse 0.05,30`); `--ideal` drops the rig's and subject's nuisances
 //! (on by default: a lab's rig); `--arm-inertia-scale F` multiplies the simulated arm's
 //! segment masses and moments of inertia by `F` (a subject heavier or lighter than the
-//! tables the diagnosis assumes; default 1). Prints the session folder and what it hides.
+//! tables the diagnosis assumes; default 1); `--movement SECONDS` sets the reach's
+//! duration (default the protocol's 3 s). Prints the session folder and what it hides.
 
 use rigtwin_tests::generator::{Design, EFFECTS, generate_design, parse_pulse};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -35,6 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut pulse = None;
     let mut ideal = false;
     let mut arm_inertia_scale = 1.0;
+    let mut movement_s = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -63,6 +66,18 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                     );
                 }
                 arm_inertia_scale = f;
+            }
+            "--movement" => {
+                let v = args
+                    .next()
+                    .ok_or_else(|| format!("--movement needs seconds; {}", usage()))?;
+                let s: f64 = v.parse().map_err(|e| format!("--movement {v:?}: {e}"))?;
+                if !(s.is_finite() && s > 0.0) {
+                    return Err(
+                        format!("--movement must be a positive duration in s, got {v}").into(),
+                    );
+                }
+                movement_s = Some(s);
             }
             "--pulse" => {
                 let v = args
@@ -93,6 +108,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         design.nuisance = None;
     }
     design.arm_inertia_scale = arm_inertia_scale;
+    design.movement_s = movement_s;
     let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);

@@ -339,6 +339,9 @@ pub struct Design {
     /// is heavier or lighter than the anthropometric model, to measure what the hand
     /// balance makes of it.
     pub arm_inertia_scale: f64,
+    /// The reach's duration, s; `None` keeps the protocol's (000_*: 3 s for 0.25 m).
+    /// Most reaching studies move about three times faster.
+    pub movement_s: Option<f64>,
 }
 
 impl Design {
@@ -352,6 +355,7 @@ impl Design {
         nuisance: Some(NuisanceConfig::REALISTIC),
         rate_hz: 1000,
         arm_inertia_scale: 1.0,
+        movement_s: None,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -375,6 +379,7 @@ impl Design {
             nuisance: Some(NuisanceConfig::REALISTIC),
             rate_hz: 1000,
             arm_inertia_scale: 1.0,
+            movement_s: None,
         }
     }
 
@@ -481,6 +486,9 @@ pub fn generate_hidden(
     let trials = design.trials;
     let mut reach = protocol.reach();
     reach.repetitions = design.repetitions;
+    if let Some(s) = design.movement_s {
+        reach.movement_s = s;
+    }
     let perturbed = reach.repetitions as usize * reach.angles_deg.len();
     reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);
     protocol.reach = Some(reach);
