@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "d0ab9e75f2c36b941f33883e496d35605464a6975bf392a9e449bc326903e28d",
+        "bc414f179a5f8f924b271cab5585f8ea9f439083ba737e17490d86c383548ce3",
     ),
     (
         "example-friction",
-        "0dc67a0330e27133ee41d0e7846a6d6a50fb6816a76ff4de4208701f87a9d26a",
+        "2cb9a227b7819b9a4337e3eb27346d20347e3c27bdfde030a689b08e3fa1415c",
     ),
     (
         "example-nuisance",
-        "a9c4e9618ba3225c96b8e43b7229113bfc8d4365d63c556d8499895a0648526d",
+        "3607f6d68bdde14db28eb2daafa1c37f05dd602b884d4d3374d54af4be6ee9c8",
     ),
     (
         "example-rotation-mass",
-        "b615cf5cdc1bfd025834d016b2351bbaf34b57a13ae70715eaf9d8dfdbb99a96",
+        "d134023384c4fd8813641dfd243f5b01a383b5842ee9c48a067ecae5627df998",
     ),
 ];
 
