@@ -249,8 +249,8 @@ fn run_without_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 /// Reaches without pulses: the admittance then makes the carts' velocity
 /// `(F − M a)/D`, so a viscous friction `b v` beside the motor gains `γ u` with
 /// `b = γ D` is a mass and a term that follows the current loop's noise the command
-/// answers. The baseline sat at the gains' ±10 % bound in all 50 below, and a friction of `D` × 10 %
-/// = 1.4–1.6 N s/m was named in 30 of the 50 unperturbed blocks of seeds 2000–2049
+/// answers. The baseline sat at the gains' ±10 % bound in all 50 below, and a friction
+/// of `D` × 10 % = 1.4–1.6 N s/m was named in 30 of the 50 unperturbed blocks of seeds 2000–2049
 /// hiding nothing, and beside (or instead of) a hidden rotation, ripple or delay in 15
 /// of 30 (seeds 1000–1009; the shared `example-nuisance` and `example-rotation-mass`
 /// alike). A fit at the bound must now stand with the gains at their nominal values

@@ -932,11 +932,17 @@ pub struct GripCompliance;
 pub(crate) fn grip_setting(s: usize) -> (f64, f64) {
     let on_log_grid =
         |(lo, hi, n): (f64, f64, usize), i: usize| lo * (hi / lo).powf(i as f64 / (n - 1) as f64);
-    let times = GRIP_TIME_S.2;
+    let (k, tau) = grip_indices(s);
     (
-        on_log_grid(GRIP_STIFFNESS_N_PER_M, s / times),
-        on_log_grid(GRIP_TIME_S, s % times),
+        on_log_grid(GRIP_STIFFNESS_N_PER_M, k),
+        on_log_grid(GRIP_TIME_S, tau),
     )
+}
+
+/// The grip's setting `s` as its places on the stiffness grid and the time-constant grid
+/// (the settings run over the time constants within each stiffness).
+fn grip_indices(s: usize) -> (usize, usize) {
+    (s / GRIP_TIME_S.2, s % GRIP_TIME_S.2)
 }
 
 /// Every other stiffness and every third time constant of the grip's grids (from the
@@ -962,7 +968,7 @@ impl HandCandidate for GripCompliance {
     /// The stiffness's place on its grid: at 0.5 or 50 kN/m it is at the edge whatever
     /// the time constant.
     fn search_position(&self, s: usize) -> (usize, usize) {
-        (s / GRIP_TIME_S.2, GRIP_STIFFNESS_N_PER_M.2)
+        (grip_indices(s).0, GRIP_STIFFNESS_N_PER_M.2)
     }
     fn columns(&self) -> usize {
         base_columns()
