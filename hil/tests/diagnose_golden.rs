@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "bc414f179a5f8f924b271cab5585f8ea9f439083ba737e17490d86c383548ce3",
+        "7a371306eee61012d258cac1b1f3b23423440af853aad316b923795b93804b12",
     ),
     (
         "example-friction",
-        "2cb9a227b7819b9a4337e3eb27346d20347e3c27bdfde030a689b08e3fa1415c",
+        "79cb2adc936be0c968acce02e8b77d5dce7a0cbcff348f93e25e642488e15251",
     ),
     (
         "example-nuisance",
-        "3607f6d68bdde14db28eb2daafa1c37f05dd602b884d4d3374d54af4be6ee9c8",
+        "6d1d245686d6566bac965eaf9ee2077eefe7bb052ef13aa6624cecd573d86787",
     ),
     (
         "example-rotation-mass",
-        "d134023384c4fd8813641dfd243f5b01a383b5842ee9c48a067ecae5627df998",
+        "cc36368967f667c81378c380989a0e6851a03153e34d009831f5551f7ccfae64",
     ),
 ];
 

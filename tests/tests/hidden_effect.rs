@@ -395,7 +395,7 @@ fn hidden_handle_mass_is_found() {
 /// cause. On the shared layout's long pulses it reads as a heavier handle (0.18 kg on
 /// seed 2000 before the rival) or, once the handle is held to the rival, as structure
 /// outside the catalog. A heavier handle must now also beat an arm within ±20 % of the
-/// tables (`ArmInertia`), and the hand's library is given that arm: nothing is named,
+/// tables (`SubjectArm`), and the hand's library is given that arm: nothing is named,
 /// nothing is reported as `hand_unexplained`, the rival is what rejected the mass, and
 /// its scale is the subject's to 0.04 (measured within 0.016 on seeds 2000–2003 at
 /// ×0.85 and ×1.15, the least-squares fit of a correct model).
@@ -412,16 +412,45 @@ fn an_arm_heavier_than_the_tables_is_not_a_heavier_handle() {
         "reported {:?}",
         d.hand_unexplained
     );
-    let mass = d.ranking.iter().find(|r| r.name == "handle-mass").unwrap();
-    assert!(
-        mass.rejected
-            .iter()
-            .any(|w| w.contains("not told from the subject's arm")),
-        "{:?}",
-        mass.rejected
-    );
+    assert_told_from_the_arm(&d, "handle-mass", "seed 2000");
     let fitted = d.hand_arm_inertia_scale.unwrap();
     assert!((fitted - 1.15).abs() < 0.04, "arm inertia ×{fitted:.3}");
+}
+
+/// On 1 s reaches (most reaching studies move that fast; the shared sessions take 3 s)
+/// the reach's torque, and with it the muscles' activation-dependent impedance, swings
+/// within the 0.3 s window after each pulse. The hand baseline's constant `D` and `K`
+/// leave a misfit a heavier handle takes up: on the ideal rig without the arm's motor
+/// noise, where nothing but that structure is left, seed 2001 named a handle of 0.39 kg.
+/// The rival `SubjectArm` carries each joint's impedance following the torque the
+/// reference holds there besides the arm's inertia, and a handle or a grip given the
+/// same must beat it: nothing is named, and the handle's row says the subject's arm
+/// explains it as well. (Not every quiet session: seeds 2002 and 2003 still name a
+/// handle of 0.18–0.20 kg; on the realistic rig, with the arm's motor noise, 0 of 20
+/// rehearsed sessions name one: README, "Reaches much faster than 3 s".)
+#[test]
+fn fast_reaches_hiding_nothing_name_no_heavier_handle() {
+    let design = Design {
+        movement_s: Some(1.0),
+        ..Design::QUIET
+    };
+    let seed = 2001;
+    let (_, d) = run_design("none", seed, &design);
+    assert!(d.causes.is_empty(), "seed {seed}: named {:?}", d.causes);
+    assert_told_from_the_arm(&d, "handle-mass", &format!("seed {seed}"));
+}
+
+/// Asserts that candidate `name`'s row was rejected as not told from the subject's arm
+/// (the rival `SubjectArm`).
+fn assert_told_from_the_arm(d: &Diagnosis, name: &str, what: &str) {
+    let row = d.ranking.iter().find(|r| r.name == name).unwrap();
+    assert!(
+        row.rejected
+            .iter()
+            .any(|w| w.contains("not told from the subject's arm")),
+        "{what}: {name} {:?}",
+        row.rejected
+    );
 }
 
 /// The arm's inertia follows the manifest's `body_mass_kg` (segment masses and moments

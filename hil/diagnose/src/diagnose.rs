@@ -79,7 +79,7 @@ use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
 use super::gram::Gram;
 use super::hand::{
-    ARM_INERTIA_TOLERANCE, ArmInertia, HandCandidate, HandJudgement, ReplicateTest, StretchReflex,
+    ARM_INERTIA_TOLERANCE, HandCandidate, HandJudgement, ReplicateTest, StretchReflex, SubjectArm,
     baseline_parameters, hand_candidate, hand_fit_rows, judge_hand,
 };
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
@@ -364,7 +364,7 @@ pub struct Diagnosis {
     /// The factor on the arm's inertia (the tables', scaled to the subject's segment
     /// lengths and body mass) that fits the responses best within ±20 %
     /// (`ARM_INERTIA_TOLERANCE`) given the named human-side effects
-    /// (`hand::ArmInertia`): a nuisance of every subject, never a cause. Against the
+    /// (`hand::SubjectArm`): a nuisance of every subject, never a cause. Against the
     /// baseline alone it is the rival a heavier handle or a grip must beat.
     pub hand_arm_inertia_scale: Option<f64>,
     /// Every judged candidate, best held-out gain first.
@@ -1816,9 +1816,10 @@ fn rank_hand(
             let t_crit = student_t_critical(alpha_each, df as f64);
             ranked.extend(
                 h.fits
-                    .iter()
+                    .par_iter()
                     .enumerate()
-                    .map(|(i, hf)| hand_row(&h, i, hf, t_crit, opts.min_gain, scale)),
+                    .map(|(i, hf)| hand_row(&h, i, hf, t_crit, opts.min_gain, scale))
+                    .collect::<Result<Vec<_>, DiscrepancyError>>()?,
             );
             df_out = Some(df);
             t_out = Some(t_crit);
@@ -1869,7 +1870,7 @@ fn hand_row(
     t_crit: f64,
     min_gain: f64,
     scale: &SessionScale,
-) -> Ranked {
+) -> Result<Ranked, DiscrepancyError> {
     // The test runs on independent units when the fitted ones average
     // repetitions, else on the fitted ones.
     let test = h
@@ -1883,7 +1884,12 @@ fn hand_row(
         scale,
     };
     let row = judge.row(hf.candidate.as_ref(), &hf.fit, &h.baseline, test, &[]);
-    judge.against_the_arm(row, &hf.fit, test.map(|t| t.0))
+    let members: Vec<HandMember> = row
+        .kind
+        .and_then(hand_candidate)
+        .map(|c| vec![(Arc::from(c), hf.fit.setting)])
+        .unwrap_or_default();
+    judge.against_the_arm(row, &members, 0.0)
 }
 
 /// How a hand-balance candidate is judged: against `base` (the hand baseline, or the
@@ -1898,38 +1904,54 @@ struct HandJudge<'a> {
 }
 
 impl HandJudge<'_> {
-    /// `row`, a heavier handle or a grip judged against the baseline (fitted as `fit`, and
-    /// as `test` on the independent units when there are), rejected unless it also
-    /// explains the responses better than the rival [`ArmInertia`] (an arm within
-    /// ±[`ARM_INERTIA_TOLERANCE`] of the tables), by the same one-sided t-test on the
-    /// same folds: an inertia an arm off the tables can make is not a finding. A stretch
-    /// reflex is not held to it: on long pulses what tells it from the baseline is
-    /// mostly its inertial part `g δ S Δa`, which the rival takes up as well (with the
-    /// rival, 4 of the 20 reflexes of the shared layout's sweep were named, all 20
-    /// without), and what the arm's tables make of one is measured instead (README).
-    fn against_the_arm(&self, mut row: Ranked, fit: &CvFit, test: Option<&CvFit>) -> Ranked {
+    /// `row`, a heavier handle or a grip (`members`, the candidate or a masked pair at
+    /// their settings, with the grip's load) judged against the baseline, rejected unless
+    /// it also explains the responses better than the rival [`SubjectArm`] (an arm within
+    /// ±[`ARM_INERTIA_TOLERANCE`] of the tables, its impedance following the reach's effort),
+    /// by the same one-sided t-test on the same folds, the members given the same change
+    /// of the impedance ([`SubjectArm::RATES`]): an inertia the subject's own arm can make is
+    /// not a finding. A stretch reflex is not held to it: on long pulses what tells it
+    /// from the baseline is mostly its inertial part `g δ S Δa`, which the rival takes up
+    /// as well (with the rival of the inertia alone, 4 of the 20 reflexes of the shared
+    /// layout's sweep were named, all 20 without), and what the arm's tables make of one
+    /// is measured instead (README).
+    fn against_the_arm(
+        &self,
+        mut row: Ranked,
+        members: &[HandMember],
+        grip_load_kg: f64,
+    ) -> Result<Ranked, DiscrepancyError> {
         let h = self.h;
         if !matches!(
             row.kind,
             Some(EffectKind::HandleMass | EffectKind::GripCompliance)
         ) {
-            return row;
+            return Ok(row);
         }
-        let rival = &h.arm_inertia;
-        let (test_fit, test_rival) = match (test, h.replicates.as_ref()) {
-            (Some(t), Some(rep)) => (t, &rep.arm_inertia),
-            _ => (fit, rival),
+        // The candidate with the impedance's rates beside it: the rival carries them.
+        let with_rates = fit_on_units(
+            h,
+            &HandJoint {
+                fixed: members.to_vec(),
+                next: Arc::new(SubjectArm::RATES),
+                grip_load_kg,
+            },
+        )?;
+        let rival = &h.subject_arm;
+        let (test_fit, test_rival) = match (with_rates.test.as_ref(), h.replicates.as_ref()) {
+            (Some(t), Some(rep)) => (t, &rep.subject_arm),
+            _ => (&with_rates.fit, rival),
         };
         let (_, _, _, t) = fold_stats(test_fit, test_rival, test_rival.nrmse());
         if t.is_nan() || t <= self.t_crit {
             let scale = 1.0 + rival.beta.last().copied().unwrap_or(f64::NAN);
             row.rejected.push(format!(
-                "not told from the subject's arm: its inertia ×{scale:.2} of the tables' (within ±{:.0} %) explains the responses as well (t {t:.1} against it)",
+                "not told from the subject's arm: its inertia ×{scale:.2} of the tables' (within ±{:.0} %) and an impedance following the reach's effort explain the responses as well (t {t:.1} against it, the candidate given the same impedance change)",
                 ARM_INERTIA_TOLERANCE * 100.0
             ));
             row.significant = false;
         }
-        row
+        Ok(row)
     }
 
     /// A reflex's parameters also in joint and endpoint units (from its gain).
@@ -2211,7 +2233,9 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
                 .as_ref()
                 .zip(h.replicates.as_ref().map(|rep| &rep.baseline));
             let lead = judge.row(&joint, &fit.fit, &h.baseline, test, &[]);
-            let lead = judge.against_the_arm(lead, &fit.fit, fit.test.as_ref());
+            let mut members = joint.fixed.clone();
+            members.push((joint.next.clone(), fit.fit.setting));
+            let lead = judge.against_the_arm(lead, &members, joint.grip_load_kg)?;
             if !lead.significant {
                 return Ok(None);
             }
@@ -2242,10 +2266,12 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
 /// most [`MAX_HAND_TERMS`]. What entered is the hand balance's `unexplained` structure,
 /// with the law it fits and where the residual without it lives.
 ///
-/// The arm's inertia within its tolerance ([`ArmInertia`]) is fitted given the named
-/// effects first, judged against them alone by the same rules, and enters the model the
-/// library is judged against when it passes: what an arm off the tables makes is not
-/// structure outside the catalog. Returned beside: its scale given the named effects
+/// The subject's arm is fitted given the named effects first, by the same forward
+/// selection: its inertia within its tolerance ([`SubjectArm::INERTIA`]) judged against
+/// them alone by the same rules, then its impedance's change over the window
+/// ([`SubjectArm::RATES`]) against what entered; what passes enters the model the library
+/// is judged against: what the subject's own arm makes is not structure outside the
+/// catalog. Returned beside: the inertia's scale given the named effects
 /// (`hand_arm_inertia_scale`).
 fn hand_outside_the_catalog(
     judge: &HandJudge<'_>,
@@ -2255,20 +2281,32 @@ fn hand_outside_the_catalog(
     let given = |members: &[HandMember]| settle_grip_load(HandJoint::given(members.to_vec()), h);
     let named_joint = given(named)?;
     let named_fit = fit_on_units(h, &named_joint)?;
+    // The arm's inertia, then its impedance's rates given it, each entering when it
+    // passes against what entered before.
     let (arm_row, arm_joint, arm_fit) =
-        hand_joint_row(judge, named, Arc::new(ArmInertia), &named_fit)?;
+        hand_joint_row(judge, named, Arc::new(SubjectArm::INERTIA), &named_fit)?;
     let arm_scale = arm_joint
         .member_parameters(arm_fit.fit.setting, &arm_fit.fit.beta, h.fb_delay_s)
         .last()
         .and_then(|(_, p)| p.first().map(|(_, v)| *v))
         .unwrap_or(1.0);
-    let (start_joint, start, mut members) = if arm_row.significant {
-        let mut members = arm_joint.fixed.clone();
-        members.push((arm_joint.next.clone(), arm_fit.fit.setting));
+    let entered = |joint: &HandJoint, fit: &HandJointFit| -> Vec<HandMember> {
+        let mut members = joint.fixed.clone();
+        members.push((joint.next.clone(), fit.fit.setting));
+        members
+    };
+    let (mut start_joint, mut start, mut members) = if arm_row.significant {
+        let members = entered(&arm_joint, &arm_fit);
         (arm_joint, arm_fit, members)
     } else {
         (named_joint, named_fit, named.to_vec())
     };
+    let (rates_row, rates_joint, rates_fit) =
+        hand_joint_row(judge, &members, Arc::new(SubjectArm::RATES), &start)?;
+    if rates_row.significant {
+        members = entered(&rates_joint, &rates_fit);
+        (start_joint, start) = (rates_joint, rates_fit);
+    }
     let start_nrmse = start.fit.nrmse();
     // The model the next term is judged against, once a term has entered.
     let mut later: Option<HandJointFit> = None;

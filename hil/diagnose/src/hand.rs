@@ -40,11 +40,13 @@
 //!   (v_h − v)`: `Δx_h = Δx + ΔF_hand/(k + b s)` from the measured force, then the
 //!   baseline refitted, for `k` and `b/k` on log grids.
 //!
-//! The tables' `M_arm` is not the subject's ([`ARM_INERTIA_TOLERANCE`]). [`ArmInertia`],
-//! the baseline plus `c M_arm Δa_h` with `|c|` within that tolerance, is a rival: a
-//! handle mass or a grip must explain the responses better than it as well as better
-//! than the baseline, and the hand's library is judged given it where it passes against
-//! the named effects. It is never a cause.
+//! The tables' `M_arm` is not the subject's ([`ARM_INERTIA_TOLERANCE`]), and the
+//! subject's impedance is not constant over the window when the reach's torque swings
+//! within it (a fast reach). [`SubjectArm`], the baseline plus `c M_arm Δa_h` with `|c|`
+//! within that tolerance plus `t Ḋ Δv_h + t K̇ Δx_h`, is a rival: a handle mass or a
+//! grip, given the same `Ḋ`, `K̇`, must explain the responses better than it as well as
+//! better than the baseline, and the hand's library is judged given its inertia and then
+//! its rates, each where it passes against the named effects. It is never a cause.
 //!
 //! The target of every fit is `−ΔF_hand − M_arm Δa_h` and the normaliser `ΔF_hand`: the
 //! NRMSE is the error of predicting the hand's response force.
@@ -140,11 +142,11 @@ pub const HAND_NOISE_TIME_S: f64 = 0.05;
 /// Whether the baseline fits a scale on the known arm inertia. Off: it buys nothing
 /// for an extra mass's estimate and would let the baseline take up part of any inertial
 /// effect (free within ±20 %, it cost the shared layout's reflexes: 3 of the first 11
-/// named where all are without it; [`ArmInertia`] is the rival instead).
+/// named where all are without it; [`SubjectArm`] is the rival instead).
 pub const FIT_ARM_MASS_SCALE: bool = false;
 /// How far a subject's arm inertia may be from the tables the balance takes it from
 /// (`HandArm`: Shadmehr & Mussa-Ivaldi's segments, scaled to the subject's lengths and
-/// body mass), a fraction, both ways: the range of [`ArmInertia`]'s scale. The three
+/// body mass), a fraction, both ways: the range of [`SubjectArm`]'s scale. The three
 /// published arm models of `reference/arm-parameters.md` differ at the reach's middle by
 /// 22–33 % in the trace of the endpoint inertia (Selen et al. and Katayama & Kawato
 /// against Shadmehr & Mussa-Ivaldi); an individual's arm is not known better than that.
@@ -825,21 +827,102 @@ impl HandCandidate for HandleMass {
     }
 }
 
-/// The rival a heavier handle and a grip are judged against besides the baseline, and
-/// the hand's library is given: the subject's arm heavier or lighter than the tables,
-/// its inertia `M_arm` scaled by `1 + c` with `|c| ≤` [`ARM_INERTIA_TOLERANCE`]. Not a
-/// cause (a nuisance of every subject). On the shared layout's long pulses an arm 15 %
-/// heavier reads as a heavier handle of 0.15–0.21 kg, and one 15–20 % lighter as a
-/// short reflex (11–13 ms: `g δ S Δa` lowers the inertia).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct ArmInertia;
+/// The columns of [`SubjectArm`]'s impedance rates: per joint (shoulder, elbow) the
+/// stiffness and then the damping per N m of effort.
+pub const IMPEDANCE_RATE_COLUMNS: usize = 4;
 
-impl HandCandidate for ArmInertia {
+/// The names of [`SubjectArm`]'s rates, in column order: a joint's stiffness (N m/rad)
+/// and damping (N m s/rad) per N m of the torque it holds.
+pub const RATE_PARAMETERS: [&str; IMPEDANCE_RATE_COLUMNS] = [
+    "shoulder_stiffness_per_torque_per_rad",
+    "elbow_stiffness_per_torque_per_rad",
+    "shoulder_damping_per_torque_s_per_rad",
+    "elbow_damping_per_torque_s_per_rad",
+];
+
+/// The rival a heavier handle and a grip are judged against besides the baseline, and
+/// the hand's library is given: the subject's own arm where it departs from the
+/// baseline's, in two ways every subject may show and neither a cause.
+///
+/// - Its inertia: `M_arm` scaled by `1 + c` with `|c| ≤` [`ARM_INERTIA_TOLERANCE`]. On
+///   the shared layout's long pulses an arm 15 % heavier reads as a heavier handle of
+///   0.15–0.21 kg, and one 15–20 % lighter as a short reflex (11–13 ms: `g δ S Δa`
+///   lowers the inertia).
+/// - Its impedance following its effort over the window: at joint `q` (shoulder,
+///   elbow) a stiffness `κ_q e_q` and a damping `β_q e_q`, with `e_q` the reference's
+///   joint torque magnitude less its mean over the window ([`HandResponse::effort`],
+///   N m), so at the hand `J⁻ᵀ diag(κ e) J⁻¹ Δx_h + J⁻ᵀ diag(β e) J⁻¹ Δv_h`. A
+///   muscle's stiffness and damping grow with its activation (the arm's
+///   `K_m = K₀ + K₁ a`; a joint's stiffness grows in proportion to the torque it holds,
+///   in people as well: Bennett et al. 1992 at the elbow during movement, Gomi & Kawato
+///   1997 at the hand), and an antagonist pair's summed activation follows the
+///   magnitude of its joint's torque. Four coefficients tied to the reference's own
+///   torque: where the torque is steady over the window (a slow reach) the columns
+///   vanish, and where it changes they differ between pulses by where in the reach
+///   each came, so they cannot stand in for an inertia (the time itself as the rate's
+///   coordinate could: on pulses of one shape a coefficient on `Δv` changing linearly in
+///   time imitates one). On a 1 s reach the
+///   window is a third of the movement and the torque swings within it by more than
+///   the co-contraction, and a constant impedance leaves a misfit a heavier handle
+///   takes up (2 of 20 sessions hiding nothing, and 6 of 6 without the arm's motor
+///   noise; none with the muscles' stiffness independent of activation). Not in the
+///   baseline: eight more free columns there take up the shared layout's reflexes
+///   (none of the first 7 named), whose evidence is as smooth.
+///
+/// A heavier handle or a grip is judged against it with the same rates beside it
+/// ([`SubjectArm::RATES`]): against the rival alone a real handle of 0.35–0.6 kg on 1 s
+/// reaches lost to it in 6 of 10 sessions, since the rates take up part of the misfit
+/// the handle's estimate carries there.
+///
+/// The hand's library is given the inertia alone ([`SubjectArm::INERTIA`]) and then the
+/// rates ([`SubjectArm::RATES`]), each where it passes against what entered before: given
+/// the whole rival at once where it passed, the library named a late feedback on 1 of
+/// the matrix's 20 grips.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SubjectArm {
+    /// Whether the impedance's rates are fitted.
+    pub rates: bool,
+    /// Whether the inertia's scale is fitted.
+    pub inertia: bool,
+}
+
+impl SubjectArm {
+    /// The inertia and the impedance's rates: the rival.
+    pub const WHOLE: SubjectArm = SubjectArm {
+        rates: true,
+        inertia: true,
+    };
+    /// The inertia alone.
+    pub const INERTIA: SubjectArm = SubjectArm {
+        rates: false,
+        inertia: true,
+    };
+    /// The impedance's rates alone: what a heavier handle or a grip carries when judged
+    /// against the rival, so that the two compare on the same footing.
+    pub const RATES: SubjectArm = SubjectArm {
+        rates: true,
+        inertia: false,
+    };
+
+    fn rate_columns(self) -> usize {
+        if self.rates {
+            IMPEDANCE_RATE_COLUMNS
+        } else {
+            0
+        }
+    }
+}
+
+impl HandCandidate for SubjectArm {
     fn kind(&self) -> Option<EffectKind> {
         None
     }
     fn name(&self) -> &'static str {
-        "arm-inertia"
+        match (self.rates, self.inertia) {
+            (true, true) => "subject-arm",
+            (false, _) => "arm-inertia",
+            (true, false) => "impedance-rates",
+        }
     }
     fn settings(&self) -> usize {
         1
@@ -848,13 +931,15 @@ impl HandCandidate for ArmInertia {
         ("none", 0.0)
     }
     fn columns(&self) -> usize {
-        base_columns() + 1
+        base_columns() + self.rate_columns() + usize::from(self.inertia)
     }
     fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
         effect_rows(self, r, s, fb, f);
     }
-    /// The arm's own inertial force at the handle: `c` times `M_arm Δa` (the balance
-    /// already carries `M_arm Δa` once).
+    /// Row `axis` of `J⁻ᵀ diag(e) J⁻¹ Δx_h` per joint's `κ`, and of the same with `Δv_h`
+    /// per joint's `β` (with the rates), then the arm's own
+    /// inertial force at the handle, `c` times `M_arm Δa` (the balance already carries
+    /// `M_arm Δa` once).
     fn extra(
         &self,
         r: &HandResponse,
@@ -864,17 +949,45 @@ impl HandCandidate for ArmInertia {
         j: usize,
         out: &mut [f64],
     ) {
-        out[0] = (r.m_arm[j] * Vector2::new(kin.a[0][j], kin.a[1][j]))[axis];
+        if self.rates {
+            let (e, ji) = (r.effort[j], r.jinv[j]);
+            let dq = ji * Vector2::new(kin.x[0][j], kin.x[1][j]);
+            let dqd = ji * Vector2::new(kin.v[0][j], kin.v[1][j]);
+            for q in 0..2 {
+                // (J⁻ᵀ)[axis][q] carries joint q's torque to the hand.
+                let lever = e[q] * ji[(q, axis)];
+                out[q] = lever * dq[q];
+                out[2 + q] = lever * dqd[q];
+            }
+        }
+        if self.inertia {
+            out[self.rate_columns()] = (r.m_arm[j] * Vector2::new(kin.a[0][j], kin.a[1][j]))[axis];
+        }
     }
+    /// The inertia's scale first, then the rates (per N m of the joint's torque).
     fn parameters(&self, _s: usize, beta: &[f64], _fb: f64) -> Vec<(String, f64)> {
-        vec![(
-            "arm_inertia_scale".to_string(),
-            1.0 + beta.last().copied().unwrap_or(f64::NAN),
-        )]
+        let own = beta.get(base_columns()..).unwrap_or(&[]);
+        let g = |i: usize| own.get(i).copied().unwrap_or(f64::NAN);
+        let mut p = Vec::new();
+        if self.inertia {
+            p.push((
+                "arm_inertia_scale".to_string(),
+                1.0 + g(self.rate_columns()),
+            ));
+        }
+        if self.rates {
+            for (i, n) in RATE_PARAMETERS.into_iter().enumerate() {
+                p.push((n.to_string(), g(i)));
+            }
+        }
+        p
     }
     fn bounds(&self) -> Vec<(usize, f64, f64)> {
+        if !self.inertia {
+            return Vec::new();
+        }
         vec![(
-            base_columns(),
+            base_columns() + self.rate_columns(),
             -ARM_INERTIA_TOLERANCE,
             ARM_INERTIA_TOLERANCE,
         )]
@@ -1017,8 +1130,8 @@ pub struct ReplicateTest {
     pub baseline: CvFit,
     /// The candidates' fits, in the order of [`HandJudgement::fits`].
     pub fits: Vec<CvFit>,
-    /// The rival's fit ([`ArmInertia`]).
-    pub arm_inertia: CvFit,
+    /// The rival's fit ([`SubjectArm`]).
+    pub subject_arm: CvFit,
     /// The repetitions themselves (for the joint fits of forward selection).
     pub units: Vec<HandResponse>,
 }
@@ -1052,8 +1165,8 @@ pub struct HandJudgement {
     pub baseline: CvFit,
     /// The candidates' fits.
     pub fits: Vec<HandFit>,
-    /// The rival's fit ([`ArmInertia`]).
-    pub arm_inertia: CvFit,
+    /// The rival's fit ([`SubjectArm`]).
+    pub subject_arm: CvFit,
     /// The arm's geometry the balance used.
     pub arm: HandArm,
 }
@@ -1192,7 +1305,11 @@ pub fn judge_hand(
             Ok(HandFit { candidate: c, fit })
         })
         .collect::<Result<Vec<_>, DiscrepancyError>>()?;
-    let arm_inertia = cross_validate(&grams(&ArmInertia, fb_delay_s), &folds, "arm inertia")?;
+    let subject_arm = cross_validate(
+        &grams(&SubjectArm::WHOLE, fb_delay_s),
+        &folds,
+        "subject arm",
+    )?;
     let replicates = match replicates {
         Some(units) => {
             // Leave one repetition out: the most degrees of freedom for the t-test.
@@ -1205,12 +1322,12 @@ pub fn judge_hand(
                 .par_iter()
                 .map(|f| cv(f.candidate.as_ref(), f.candidate.name()))
                 .collect::<Result<Vec<_>, DiscrepancyError>>()?;
-            let arm_inertia = cv(&ArmInertia, "arm inertia (replicates)")?;
+            let subject_arm = cv(&SubjectArm::WHOLE, "subject arm (replicates)")?;
             Some(ReplicateTest {
                 folds,
                 baseline,
                 fits,
-                arm_inertia,
+                subject_arm,
                 units,
             })
         }
@@ -1224,7 +1341,7 @@ pub fn judge_hand(
         whitening,
         baseline,
         fits,
-        arm_inertia,
+        subject_arm,
         arm,
     }))
 }
@@ -1254,9 +1371,74 @@ mod tests {
             dfd: [fd.clone(), fd],
             m_arm: vec![Matrix2::identity(); n],
             s: vec![Matrix2::identity(); n],
+            effort: vec![[0.0; 2]; n],
+            jinv: vec![Matrix2::identity(); n],
             rows: (0..n).collect(),
             references: 2,
             trials: vec![1],
+        }
+    }
+
+    /// The hand balance's law with the [`SubjectArm`]'s parts: `−ΔF = (1 + c) M_arm Δa +
+    /// D Δv + K Δx + J⁻ᵀ diag(e)(diag(β) J⁻¹ Δv + diag(κ) J⁻¹ Δx) + p S (Δx + ρ Δv)(t − τ)`;
+    /// by default a
+    /// non-symmetric `D` and `K` (what a moving, torque-bearing arm shows), no rates and
+    /// the tables' inertia.
+    struct ArmLaw {
+        d: Matrix2<f64>,
+        d_rate: [f64; 2],
+        k: Matrix2<f64>,
+        k_rate: [f64; 2],
+        p: f64,
+        c: f64,
+        fb: f64,
+    }
+
+    impl Default for ArmLaw {
+        fn default() -> ArmLaw {
+            ArmLaw {
+                d: Matrix2::new(12.0, -3.0, 5.0, 9.0),
+                d_rate: [0.0; 2],
+                k: Matrix2::new(420.0, 60.0, -140.0, 310.0),
+                k_rate: [0.0; 2],
+                p: 480.0,
+                c: 0.0,
+                fb: 0.06,
+            }
+        }
+    }
+
+    impl ArmLaw {
+        /// Writes the law's force into `r` from its kinematics.
+        fn impose(&self, r: &mut HandResponse) {
+            let (n, lag, rho) = (
+                r.df[0].len(),
+                self.fb * r.rate_hz,
+                feedback_velocity_ratio_s(),
+            );
+            for j in 0..n {
+                let v = Vector2::new(r.dv[0][j], r.dv[1][j]);
+                let x = Vector2::new(r.dx[0][j], r.dx[1][j]);
+                let a = Vector2::new(r.da[0][j], r.da[1][j]);
+                let xl = Vector2::new(lagged(&r.dx[0], j, lag), lagged(&r.dx[1], j, lag));
+                let vl = Vector2::new(lagged(&r.dv[0], j, lag), lagged(&r.dv[1], j, lag));
+                let (e, ji) = (r.effort[j], r.jinv[j]);
+                let kq = Matrix2::from_diagonal(&Vector2::new(
+                    self.k_rate[0] * e[0],
+                    self.k_rate[1] * e[1],
+                ));
+                let dq = Matrix2::from_diagonal(&Vector2::new(
+                    self.d_rate[0] * e[0],
+                    self.d_rate[1] * e[1],
+                ));
+                let f = -((1.0 + self.c) * r.m_arm[j] * a
+                    + self.d * v
+                    + self.k * x
+                    + ji.transpose() * (dq * ji * v + kq * ji * x)
+                    + self.p * r.s[j] * (xl + rho * vl));
+                r.df[0][j] = f[0];
+                r.df[1][j] = f[1];
+            }
         }
     }
 
@@ -1289,6 +1471,21 @@ mod tests {
         let sh = Matrix2::new(0.07, 0.02, 0.02, 0.05);
         r.m_arm = vec![m; n];
         r.s = vec![sh; n];
+        // The reference's joint torques rising and falling over the window, as on a
+        // reach whose torque swings within it (centred on the rows, as
+        // `hand_responses` does), and the arm's J⁻¹ at the reach's middle.
+        let effort: Vec<[f64; 2]> = (0..n)
+            .map(|i| {
+                [
+                    3.0 * (2.0 * PI * 1.7 * t(i)).sin(),
+                    4.0 * (2.0 * PI * 2.9 * t(i) + 0.4).cos(),
+                ]
+            })
+            .collect();
+        let mean = |q: usize| effort[100..].iter().map(|e| e[q]).sum::<f64>() / (n - 100) as f64;
+        let (m0, m1) = (mean(0), mean(1));
+        r.effort = effort.iter().map(|e| [e[0] - m0, e[1] - m1]).collect();
+        r.jinv = vec![Matrix2::new(-2.1, 3.4, 4.8, 0.9); n];
         r.rows = (100..n).collect();
         r
     }
@@ -1300,23 +1497,9 @@ mod tests {
     #[test]
     fn baseline_recovers_a_non_symmetric_impedance() {
         let mut r = moving_response();
-        let (rate, n, m, sh) = (r.rate_hz, r.df[0].len(), r.m_arm[0], r.s[0]);
-        let d = Matrix2::new(12.0, -3.0, 5.0, 9.0);
-        let k = Matrix2::new(420.0, 60.0, -140.0, 310.0);
-        let p = 480.0;
-        let fb = 0.06;
-        let lag = fb * rate;
-        let rho = feedback_velocity_ratio_s();
-        for j in 0..n {
-            let v = Vector2::new(r.dv[0][j], r.dv[1][j]);
-            let x = Vector2::new(r.dx[0][j], r.dx[1][j]);
-            let a = Vector2::new(r.da[0][j], r.da[1][j]);
-            let xl = Vector2::new(lagged(&r.dx[0], j, lag), lagged(&r.dx[1], j, lag));
-            let vl = Vector2::new(lagged(&r.dv[0], j, lag), lagged(&r.dv[1], j, lag));
-            let f = -(m * a + d * v + k * x + p * sh * (xl + rho * vl));
-            r.df[0][j] = f[0];
-            r.df[1][j] = f[1];
-        }
+        let law = ArmLaw::default();
+        law.impose(&mut r);
+        let (d, k, p, fb) = (law.d, law.k, law.p, law.fb);
         let want = [
             ("d11_n_s_per_m", d[(0, 0)]),
             ("d12_n_s_per_m", d[(0, 1)]),
@@ -1370,6 +1553,55 @@ mod tests {
         let g = &hand_grams(&HandBaseline, &r, fb, &mixing)[0];
         let beta = recovers(g, "with offsets");
         assert!(g.sse(&beta) < 1e-12 * g.norm_sq, "offsets left a residual");
+    }
+
+    /// A response built by the baseline's law with an impedance that changes over the
+    /// window (what a muscle's activation-dependent impedance does on a fast reach) and an
+    /// arm 12 % heavier than the tables: the rival [`SubjectArm`] gives the rates and the
+    /// inertia's scale back to round-off, and the baseline, which lacks them, does not fit
+    /// it (its error is more than a tenth of the force).
+    #[test]
+    fn the_subject_arm_recovers_an_impedance_changing_over_the_window() {
+        let mut r = moving_response();
+        // Per N m of torque: with the response's ±3–4 N m swing the joints' stiffness
+        // changes by about ±25 N m/rad and their damping by ±0.4 N m s/rad, as the
+        // arm's K_m = K0 + K1 a does on a 1 s reach.
+        let law = ArmLaw {
+            d_rate: [0.12, 0.08],
+            k_rate: [6.0, 9.0],
+            c: 0.12,
+            ..ArmLaw::default()
+        };
+        law.impose(&mut r);
+        let (d_rate, k_rate, c, fb) = (law.d_rate, law.k_rate, law.c, law.fb);
+        let fit = |cand: &dyn HandCandidate| {
+            let mut g = Gram::new(cand.columns()).with_bounds(cand.bounds());
+            cand.rows(&r, 0, fb, &mut |x, y, nrm| g.push(x, y, nrm));
+            let beta = g.solve().expect("independent columns");
+            (g.sse(&beta) / g.norm_sq, beta)
+        };
+        let (base_err, _) = fit(&HandBaseline);
+        assert!(base_err > 0.01, "the baseline fits it: {base_err}");
+        let (err, beta) = fit(&SubjectArm::WHOLE);
+        assert!(err < 1e-12, "the rival leaves {err}");
+        let got: std::collections::BTreeMap<String, f64> = SubjectArm::WHOLE
+            .parameters(0, &beta, fb)
+            .into_iter()
+            .collect();
+        let want = [
+            ("arm_inertia_scale", 1.0 + c),
+            (RATE_PARAMETERS[0], k_rate[0]),
+            (RATE_PARAMETERS[1], k_rate[1]),
+            (RATE_PARAMETERS[2], d_rate[0]),
+            (RATE_PARAMETERS[3], d_rate[1]),
+        ];
+        for (name, value) in want {
+            let v = got.get(name).copied().unwrap_or(f64::NAN);
+            assert!(
+                (v - value).abs() < 1e-6 * value.abs().max(1.0),
+                "{name}: {v} vs {value}"
+            );
+        }
     }
 
     /// A response with a handle mass *and* a stretch reflex, built exactly by their

@@ -41,7 +41,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 use rigtwin_arm::impedance::{endpoint_inertia, joint_to_endpoint};
-use rigtwin_arm::kinematics::{Elbow, inverse};
+use rigtwin_arm::kinematics::{Elbow, inverse, jacobian};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
 use rigtwin_arm::params::ArmParams;
 use rigtwin_device::signal::{EdgeMode, gradient, savgol_filter};
@@ -115,6 +115,19 @@ impl HandArm {
         let s = joint_to_endpoint(&self.params, q, &self.ata).ok()?;
         Some((m, s))
     }
+
+    /// The arm's Jacobian `J = ∂x/∂q` (m/rad) and its inverse at a handle position (rig
+    /// frame); `None` out of reach or singular.
+    #[must_use]
+    pub fn jacobian(&self, hand_rig_m: [f64; 2]) -> Option<(Matrix2<f64>, Matrix2<f64>)> {
+        let p = Vector2::new(
+            hand_rig_m[0] - self.shoulder_m[0],
+            hand_rig_m[1] - self.shoulder_m[1],
+        );
+        let q = inverse(&self.params, p, Elbow::Down).ok()?;
+        let j = jacobian(&self.params, q);
+        Some((j, j.try_inverse()?))
+    }
 }
 
 /// The weight of each muscle in the feedback shape `S`: 1 for a muscle the arm keeps
@@ -159,6 +172,14 @@ pub struct HandResponse {
     pub m_arm: Vec<Matrix2<f64>>,
     /// Feedback shape `S` at each sample, dimensionless.
     pub s: Vec<Matrix2<f64>>,
+    /// The reference's effort at each joint (shoulder, elbow) and sample less its mean
+    /// over the window after the onset, N m: the effort is the magnitude of the joint
+    /// torque the subject's muscles hold in the unperturbed movement,
+    /// `|Jᵀ (F_hand + M_arm a)|` of the reference (what the hand pushes on the handle
+    /// plus what accelerates the arm). A joint's muscle impedance grows with it.
+    pub effort: Vec<[f64; 2]>,
+    /// The arm's `J⁻¹` (joint angles per hand displacement) at each sample, rad/m.
+    pub jinv: Vec<Matrix2<f64>>,
     /// Evaluated local indices (from the onset to the end of the window).
     pub rows: Vec<usize>,
     /// Unperturbed trials in the reference (summed over the averaged trials).
@@ -329,6 +350,17 @@ fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResp
         dfd: [sum(&|r| &r.dfd[0]), sum(&|r| &r.dfd[1])],
         m_arm: sum_mat(&|r| &r.m_arm),
         s: sum_mat(&|r| &r.s),
+        effort: {
+            let mut out = vec![[0.0; 2]; first.effort.len()];
+            for (r, _, w) in terms {
+                for (o, v) in out.iter_mut().zip(&r.effort) {
+                    o[0] += w * v[0];
+                    o[1] += w * v[1];
+                }
+            }
+            out
+        },
+        jinv: sum_mat(&|r| &r.jinv),
         rows: first.rows.clone(),
         references: terms.iter().map(|(r, _, _)| r.references).sum(),
         trials: terms
@@ -567,6 +599,8 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 return Ok(None);
             }
             let mut d: [Vec<f64>; 10] = std::array::from_fn(|_| vec![0.0; n]);
+            // The reference's own acceleration and hand force (channels 4–7).
+            let mut reference: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; n]);
             for (c, dc) in d.iter_mut().enumerate() {
                 for (j, v) in dc.iter_mut().enumerate() {
                     let i = k0 - lead + j;
@@ -580,17 +614,35 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                         .sum::<f64>()
                         / aligned.len() as f64;
                     *v = p.ch[c][i] - mean;
+                    if (4..8).contains(&c) {
+                        reference[c - 4][j] = mean;
+                    }
                 }
             }
             let mut m_arm = Vec::with_capacity(n);
             let mut s = Vec::with_capacity(n);
+            let mut effort = Vec::with_capacity(n);
+            let mut jinv = Vec::with_capacity(n);
             for j in 0..n {
                 let i = k0 - lead + j;
                 let Some((m, sh)) = arm.at([p.ch[0][i], p.ch[1][i]]) else {
                     return Ok(None);
                 };
+                let Some((jac, ji)) = arm.jacobian([p.ch[0][i], p.ch[1][i]]) else {
+                    return Ok(None);
+                };
+                let a = Vector2::new(reference[0][j], reference[1][j]);
+                let f = Vector2::new(reference[2][j], reference[3][j]);
+                let tau = jac.transpose() * (f + m * a);
+                effort.push([tau[0].abs(), tau[1].abs()]);
+                jinv.push(ji);
                 m_arm.push(m);
                 s.push(sh);
+            }
+            let after = (n - lead) as f64;
+            for q in 0..2 {
+                let mean = effort[lead..].iter().map(|e| e[q]).sum::<f64>() / after;
+                effort.iter_mut().for_each(|e| e[q] -= mean);
             }
             let [x, y, vx, vy, ax, ay, fx, fy, fdx, fdy] = d;
             Ok(Some(HandResponse {
@@ -605,6 +657,8 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 dfd: [fdx, fdy],
                 m_arm,
                 s,
+                effort,
+                jinv,
                 rows: (lead..n).step_by(decim).collect(),
                 references: aligned.len(),
                 trials: vec![e.id],
@@ -760,6 +814,8 @@ mod tests {
             dfd: [v.clone(), v],
             m_arm: vec![Matrix2::identity() * value; 4],
             s: vec![Matrix2::identity(); 4],
+            effort: vec![[value; 2]; 4],
+            jinv: vec![Matrix2::identity(); 4],
             rows: vec![1, 2, 3],
             references: 2,
             trials: vec![id],

@@ -66,10 +66,10 @@ pub use error::DiscrepancyError;
 pub use friction::{RailFriction, SMOOTH_VELOCITY_STEPS, smooth_velocity_m_per_s};
 pub use gram::{Gram, Intercepts};
 pub use hand::{
-    ARM_INERTIA_TOLERANCE, ArmInertia, FEEDBACK_DELAYS_MS, FIT_ARM_MASS_SCALE,
-    GRIP_STIFFNESS_N_PER_M, GRIP_TIME_S, GripCompliance, HandBaseline, HandCandidate, HandFit,
-    HandJudgement, HandleMass, Kin, REFLEX_DELAY_MS, RESPONSE_OFFSET_COLUMNS, ReplicateTest,
-    StretchReflex, hand_fit_rows, hand_grams, judge_hand,
+    ARM_INERTIA_TOLERANCE, FEEDBACK_DELAYS_MS, FIT_ARM_MASS_SCALE, GRIP_STIFFNESS_N_PER_M,
+    GRIP_TIME_S, GripCompliance, HandBaseline, HandCandidate, HandFit, HandJudgement, HandleMass,
+    IMPEDANCE_RATE_COLUMNS, Kin, REFLEX_DELAY_MS, RESPONSE_OFFSET_COLUMNS, ReplicateTest,
+    StretchReflex, SubjectArm, hand_fit_rows, hand_grams, judge_hand,
 };
 pub use hand_signals::{
     HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, hand_responses,
