@@ -43,8 +43,10 @@
 //! The tables' `M_arm` is not the subject's ([`ARM_INERTIA_TOLERANCE`]), and the
 //! subject's impedance is not constant over the window when the reach's torque swings
 //! within it (a fast reach). [`SubjectArm`], the baseline plus `c M_arm Δa_h` with `|c|`
-//! within that tolerance plus `t Ḋ Δv_h + t K̇ Δx_h`, is a rival: a handle mass or a
-//! grip, given the same `Ḋ`, `K̇`, must explain the responses better than it as well as
+//! within that tolerance plus, at each joint `q`, a stiffness `κ_q e_q` and a damping
+//! `β_q e_q` that follow `e_q`, the change over the window of the joint torque the
+//! reference holds ([`HandResponse::effort`]), is a rival: a handle mass or a grip, given
+//! the same `κ`, `β` columns, must explain the responses better than it as well as
 //! better than the baseline, and the hand's library is judged given its inertia and then
 //! its rates, each where it passes against the named effects. It is never a cause.
 //!
@@ -315,6 +317,13 @@ pub trait HandCandidate: Sync + Send {
     /// with another (the grip's stiffness with its time constant).
     fn search_position(&self, s: usize) -> (usize, usize) {
         (s, self.settings())
+    }
+    /// Whether setting `s` holds every other searched parameter where setting `of` does:
+    /// the settings that do are the search along [`Self::setting`]'s parameter through
+    /// `of` (for the error curve of `cause.png`). Always, unless the search crosses its
+    /// parameter with another.
+    fn on_the_line_of(&self, _s: usize, _of: usize) -> bool {
+        true
     }
     /// Regressors (the baseline's first).
     fn columns(&self) -> usize;
@@ -857,27 +866,24 @@ pub const RATE_PARAMETERS: [&str; IMPEDANCE_RATE_COLUMNS] = [
 ///   in people as well: Bennett et al. 1992 at the elbow during movement, Gomi & Kawato
 ///   1997 at the hand), and an antagonist pair's summed activation follows the
 ///   magnitude of its joint's torque. Four coefficients tied to the reference's own
-///   torque: where the torque is steady over the window (a slow reach) the columns
-///   vanish, and where it changes they differ between pulses by where in the reach
-///   each came, so they cannot stand in for an inertia (the time itself as the rate's
-///   coordinate could: on pulses of one shape a coefficient on `Δv` changing linearly in
-///   time imitates one). On a 1 s reach the
-///   window is a third of the movement and the torque swings within it by more than
-///   the co-contraction, and a constant impedance leaves a misfit a heavier handle
-///   takes up (2 of 20 sessions hiding nothing, and 6 of 6 without the arm's motor
-///   noise; none with the muscles' stiffness independent of activation). Not in the
-///   baseline: eight more free columns there take up the shared layout's reflexes
-///   (none of the first 7 named), whose evidence is as smooth.
+///   torque, whose change over the window differs between pulses by where in the reach
+///   each came (rising, falling, steady): they cannot stand in for an inertia, as the
+///   time itself as the coordinate could (on pulses of one shape a coefficient on `Δv`
+///   changing linearly in time imitates one). On a 1 s reach the window is a third of the movement and the
+///   torque swings within it by more than the co-contraction, and a constant impedance
+///   leaves a misfit a heavier handle takes up (README, "Reaches much faster than
+///   3 s"). Not in the baseline: free columns there take up part of the shared
+///   layout's reflexes, whose evidence is as smooth
+///   (`hil/docs/notes/2026-12-05-fast-reaches.md`).
 ///
 /// A heavier handle or a grip is judged against it with the same rates beside it
-/// ([`SubjectArm::RATES`]): against the rival alone a real handle of 0.35–0.6 kg on 1 s
-/// reaches lost to it in 6 of 10 sessions, since the rates take up part of the misfit
-/// the handle's estimate carries there.
+/// ([`SubjectArm::RATES`]), so that what the two are compared on is the inertia alone:
+/// the rates take up part of the misfit a real handle's estimate carries on fast
+/// reaches.
 ///
 /// The hand's library is given the inertia alone ([`SubjectArm::INERTIA`]) and then the
-/// rates ([`SubjectArm::RATES`]), each where it passes against what entered before: given
-/// the whole rival at once where it passed, the library named a late feedback on 1 of
-/// the matrix's 20 grips.
+/// rates ([`SubjectArm::RATES`]), each where it passes against what entered before, as
+/// forward selection admits its members.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SubjectArm {
     /// Whether the impedance's rates are fitted.
@@ -1082,6 +1088,10 @@ impl HandCandidate for GripCompliance {
     /// the time constant.
     fn search_position(&self, s: usize) -> (usize, usize) {
         (grip_indices(s).0, GRIP_STIFFNESS_N_PER_M.2)
+    }
+    /// The same time constant.
+    fn on_the_line_of(&self, s: usize, of: usize) -> bool {
+        grip_indices(s).1 == grip_indices(of).1
     }
     fn columns(&self) -> usize {
         base_columns()
@@ -1494,6 +1504,29 @@ mod tests {
     /// (what a moving, torque-bearing arm shows), gives those matrices and the feedback
     /// gain back to round-off: the columns are the law's, in the order the parameters
     /// are named.
+    /// The grip's search crosses the stiffness with the time constant: the settings on
+    /// the line of one are every stiffness of the grid, once each and rising, at that
+    /// setting's time constant, and the edge rule reads the stiffness's place alone.
+    #[test]
+    fn the_grips_line_holds_its_time_constant() {
+        let g = GripCompliance;
+        let of = 7 * GRIP_TIME_S.2 + 5;
+        let line: Vec<usize> = (0..g.settings())
+            .filter(|s| g.on_the_line_of(*s, of))
+            .collect();
+        assert_eq!(line.len(), GRIP_STIFFNESS_N_PER_M.2);
+        assert!(line.contains(&of));
+        let tau = grip_setting(of).1;
+        assert!(line.iter().all(|s| grip_setting(*s).1 == tau));
+        assert!(
+            line.windows(2)
+                .all(|w| grip_setting(w[0]).0 < grip_setting(w[1]).0)
+        );
+        assert_eq!(g.search_position(of), (7, GRIP_STIFFNESS_N_PER_M.2));
+        // One parameter searched: every setting is on the line.
+        assert!((0..StretchReflex.settings()).all(|s| StretchReflex.on_the_line_of(s, 0)));
+    }
+
     #[test]
     fn baseline_recovers_a_non_symmetric_impedance() {
         let mut r = moving_response();

@@ -152,6 +152,9 @@ impl HandCandidate for HandJoint {
     fn search_position(&self, s: usize) -> (usize, usize) {
         self.next.search_position(s)
     }
+    fn on_the_line_of(&self, s: usize, of: usize) -> bool {
+        self.next.on_the_line_of(s, of)
+    }
     fn columns(&self) -> usize {
         base_columns()
             + self

@@ -600,7 +600,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             }
             let mut d: [Vec<f64>; 10] = std::array::from_fn(|_| vec![0.0; n]);
             // The reference's own acceleration and hand force (channels 4–7).
-            let mut reference: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; n]);
+            let mut reference = vec![[0.0; 4]; n];
             for (c, dc) in d.iter_mut().enumerate() {
                 for (j, v) in dc.iter_mut().enumerate() {
                     let i = k0 - lead + j;
@@ -615,7 +615,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                         / aligned.len() as f64;
                     *v = p.ch[c][i] - mean;
                     if (4..8).contains(&c) {
-                        reference[c - 4][j] = mean;
+                        reference[j][c - 4] = mean;
                     }
                 }
             }
@@ -623,7 +623,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             let mut s = Vec::with_capacity(n);
             let mut effort = Vec::with_capacity(n);
             let mut jinv = Vec::with_capacity(n);
-            for j in 0..n {
+            for (j, rf) in reference.iter().enumerate() {
                 let i = k0 - lead + j;
                 let Some((m, sh)) = arm.at([p.ch[0][i], p.ch[1][i]]) else {
                     return Ok(None);
@@ -631,8 +631,8 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 let Some((jac, ji)) = arm.jacobian([p.ch[0][i], p.ch[1][i]]) else {
                     return Ok(None);
                 };
-                let a = Vector2::new(reference[0][j], reference[1][j]);
-                let f = Vector2::new(reference[2][j], reference[3][j]);
+                let a = Vector2::new(rf[0], rf[1]);
+                let f = Vector2::new(rf[2], rf[3]);
                 let tau = jac.transpose() * (f + m * a);
                 effort.push([tau[0].abs(), tau[1].abs()]);
                 jinv.push(ji);

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use super::candidate::{Baseline, Candidate as _};
 use super::diagnose::{Analysis, CandidateFit, Diagnosis, Ranked};
 use super::error::DiscrepancyError;
-use super::hand::{GRIP_TIME_S, HandBaseline, HandFit, HandJudgement, hand_fit_rows};
+use super::hand::{HandBaseline, HandFit, HandJudgement, hand_fit_rows};
 use super::plots::{Drawn, Figure, Series, Style};
 
 fn fmt_params(
@@ -581,16 +581,11 @@ fn hand_cause_figure(h: &HandJudgement, hf: &HandFit, d: &Diagnosis) -> Figure {
         };
     }
     let norm: f64 = fit.folds.iter().map(|f| f.test_norm_sq).sum();
-    let stride = if c.kind() == Some(EffectKind::GripCompliance) {
-        GRIP_TIME_S.2
-    } else {
-        1
-    };
     let curve: Vec<(f64, f64)> = fit
         .curve
         .iter()
         .enumerate()
-        .filter(|(s, _)| s % stride == fit.setting % stride)
+        .filter(|(s, _)| c.on_the_line_of(*s, fit.setting))
         .map(|(s, sse)| (c.setting(s).1, (sse / norm).sqrt()))
         .collect();
     let (name, value) = c.setting(fit.setting);
