@@ -426,8 +426,9 @@ fn an_arm_heavier_than_the_tables_is_not_a_heavier_handle() {
 /// reference holds there besides the arm's inertia, and a handle or a grip given the
 /// same must beat it: nothing is named, and the handle's row says the subject's arm
 /// explains it as well. (Not every quiet session: seeds 2002 and 2003 still name a
-/// handle of 0.18–0.20 kg; on the realistic rig, with the arm's motor noise, 0 of 20
-/// rehearsed sessions name one: README, "Reaches much faster than 3 s".)
+/// handle of 0.16 and 0.27 kg with a stiff grip beside it, as before; on the realistic
+/// rig, with the arm's motor noise, 0 of 20 rehearsed sessions name one: README,
+/// "Reaches much faster than 3 s".)
 #[test]
 fn fast_reaches_hiding_nothing_name_no_heavier_handle() {
     let design = Design {
