@@ -103,31 +103,35 @@ impl HandArm {
         })
     }
 
-    /// `(M_arm, S)` at a handle position (rig frame); `None` out of reach or singular.
+    /// The arm at a handle position (rig frame); `None` out of reach or singular.
     #[must_use]
-    pub fn at(&self, hand_rig_m: [f64; 2]) -> Option<(Matrix2<f64>, Matrix2<f64>)> {
-        let p = Vector2::new(
-            hand_rig_m[0] - self.shoulder_m[0],
-            hand_rig_m[1] - self.shoulder_m[1],
-        );
-        let q = inverse(&self.params, p, Elbow::Down).ok()?;
-        let m = endpoint_inertia(&self.params, q).ok()?;
-        let s = joint_to_endpoint(&self.params, q, &self.ata).ok()?;
-        Some((m, s))
-    }
-
-    /// The arm's Jacobian `J = ∂x/∂q` (m/rad) and its inverse at a handle position (rig
-    /// frame); `None` out of reach or singular.
-    #[must_use]
-    pub fn jacobian(&self, hand_rig_m: [f64; 2]) -> Option<(Matrix2<f64>, Matrix2<f64>)> {
+    pub fn at(&self, hand_rig_m: [f64; 2]) -> Option<ArmPosture> {
         let p = Vector2::new(
             hand_rig_m[0] - self.shoulder_m[0],
             hand_rig_m[1] - self.shoulder_m[1],
         );
         let q = inverse(&self.params, p, Elbow::Down).ok()?;
         let j = jacobian(&self.params, q);
-        Some((j, j.try_inverse()?))
+        Some(ArmPosture {
+            m_arm: endpoint_inertia(&self.params, q).ok()?,
+            s: joint_to_endpoint(&self.params, q, &self.ata).ok()?,
+            j,
+            jinv: j.try_inverse()?,
+        })
     }
+}
+
+/// What the hand balance takes from the arm's tables at one handle position.
+#[derive(Debug, Clone, Copy)]
+pub struct ArmPosture {
+    /// Endpoint inertia `M_arm`, kg.
+    pub m_arm: Matrix2<f64>,
+    /// Feedback shape `S`, dimensionless.
+    pub s: Matrix2<f64>,
+    /// Jacobian `J = ∂x/∂q`, m/rad.
+    pub j: Matrix2<f64>,
+    /// `J⁻¹`, rad/m.
+    pub jinv: Matrix2<f64>,
 }
 
 /// The weight of each muscle in the feedback shape `S`: 1 for a muscle the arm keeps
@@ -625,10 +629,13 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             let mut jinv = Vec::with_capacity(n);
             for (j, rf) in reference.iter().enumerate() {
                 let i = k0 - lead + j;
-                let Some((m, sh)) = arm.at([p.ch[0][i], p.ch[1][i]]) else {
-                    return Ok(None);
-                };
-                let Some((jac, ji)) = arm.jacobian([p.ch[0][i], p.ch[1][i]]) else {
+                let Some(ArmPosture {
+                    m_arm: m,
+                    s: sh,
+                    j: jac,
+                    jinv: ji,
+                }) = arm.at([p.ch[0][i], p.ch[1][i]])
+                else {
                     return Ok(None);
                 };
                 let a = Vector2::new(rf[0], rf[1]);
@@ -899,7 +906,7 @@ mod tests {
             shoulder_m: [0.0, -0.425],
             ata: model.to_joint(&odd_part_weights(&model)),
         };
-        let Some((m, s)) = arm.at([0.0, 0.0]) else {
+        let Some(ArmPosture { m_arm: m, s, .. }) = arm.at([0.0, 0.0]) else {
             panic!("the workspace centre is reachable");
         };
         // Symmetric to round-off, positive definite (physical inertia and a Gram matrix).
