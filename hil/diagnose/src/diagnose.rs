@@ -1886,9 +1886,9 @@ fn hand_row(
     let row = judge.row(hf.candidate.as_ref(), &hf.fit, &h.baseline, test, &[]);
     let members: Vec<HandMember> = row
         .kind
-        .and_then(hand_candidate)
-        .map(|c| vec![(Arc::from(c), hf.fit.setting)])
-        .unwrap_or_default();
+        .and_then(|k| hand_member(h, k))
+        .into_iter()
+        .collect();
     judge.against_the_arm(row, &members, 0.0)
 }
 
@@ -2153,8 +2153,7 @@ fn hand_forward_select(
             cause.refit(params_with_se(judge.with_units(kind, params), &fp))?;
         }
         causes.push(Cause::of(&r)?);
-        chosen = joint.fixed.clone();
-        chosen.push((joint.next.clone(), fit.setting));
+        chosen = joint.members_at(fit.setting);
     }
     Ok(HandSelection {
         causes,
@@ -2233,8 +2232,7 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
                 .as_ref()
                 .zip(h.replicates.as_ref().map(|rep| &rep.baseline));
             let lead = judge.row(&joint, &fit.fit, &h.baseline, test, &[]);
-            let mut members = joint.fixed.clone();
-            members.push((joint.next.clone(), fit.fit.setting));
+            let members = joint.members_at(fit.fit.setting);
             let lead = judge.against_the_arm(lead, &members, joint.grip_load_kg)?;
             if !lead.significant {
                 return Ok(None);
@@ -2290,13 +2288,8 @@ fn hand_outside_the_catalog(
         .last()
         .and_then(|(_, p)| p.first().map(|(_, v)| *v))
         .unwrap_or(1.0);
-    let entered = |joint: &HandJoint, fit: &HandJointFit| -> Vec<HandMember> {
-        let mut members = joint.fixed.clone();
-        members.push((joint.next.clone(), fit.fit.setting));
-        members
-    };
     let (mut start_joint, mut start, mut members) = if arm_row.significant {
-        let members = entered(&arm_joint, &arm_fit);
+        let members = arm_joint.members_at(arm_fit.fit.setting);
         (arm_joint, arm_fit, members)
     } else {
         (named_joint, named_fit, named.to_vec())
@@ -2304,7 +2297,7 @@ fn hand_outside_the_catalog(
     let (rates_row, rates_joint, rates_fit) =
         hand_joint_row(judge, &members, Arc::new(SubjectArm::RATES), &start)?;
     if rates_row.significant {
-        members = entered(&rates_joint, &rates_fit);
+        members = rates_joint.members_at(rates_fit.fit.setting);
         (start_joint, start) = (rates_joint, rates_fit);
     }
     let start_nrmse = start.fit.nrmse();
@@ -2329,8 +2322,7 @@ fn hand_outside_the_catalog(
         let Some((r, t, joint, fit)) = round.into_iter().find(|(r, ..)| r.significant) else {
             break;
         };
-        members = joint.fixed.clone();
-        members.push((joint.next.clone(), fit.setting));
+        members = joint.members_at(fit.setting);
         chosen.push((t, r));
         later = Some(fit_on_units(h, &given(&members)?)?);
         last = Some((joint, fit));

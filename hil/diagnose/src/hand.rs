@@ -869,11 +869,11 @@ pub const RATE_PARAMETERS: [&str; IMPEDANCE_RATE_COLUMNS] = [
 ///   torque, whose change over the window differs between pulses by where in the reach
 ///   each came (rising, falling, steady): they cannot stand in for an inertia, as the
 ///   time itself as the coordinate could (on pulses of one shape a coefficient on `Δv`
-///   changing linearly in time imitates one). On a 1 s reach the window is a third of the movement and the
-///   torque swings within it by more than the co-contraction, and a constant impedance
-///   leaves a misfit a heavier handle takes up (README, "Reaches much faster than
-///   3 s"). Not in the baseline: free columns there take up part of the shared
-///   layout's reflexes, whose evidence is as smooth
+///   changing linearly in time imitates one). On a 1 s reach the window is a third of
+///   the movement and the torque swings within it by more than the co-contraction, and
+///   a constant impedance leaves a misfit a heavier handle takes up (README, "Reaches
+///   much faster than 3 s"). Not in the baseline: free columns there take up part of
+///   the shared layout's reflexes, whose evidence is as smooth
 ///   (`hil/docs/notes/2026-12-05-fast-reaches.md`).
 ///
 /// A heavier handle or a grip is judged against it with the same rates beside it
@@ -943,9 +943,8 @@ impl HandCandidate for SubjectArm {
         effect_rows(self, r, s, fb, f);
     }
     /// Row `axis` of `J⁻ᵀ diag(e) J⁻¹ Δx_h` per joint's `κ`, and of the same with `Δv_h`
-    /// per joint's `β` (with the rates), then the arm's own
-    /// inertial force at the handle, `c` times `M_arm Δa` (the balance already carries
-    /// `M_arm Δa` once).
+    /// per joint's `β` (with the rates), then the arm's own inertial force at the handle,
+    /// `c` times `M_arm Δa` (the balance already carries `M_arm Δa` once).
     fn extra(
         &self,
         r: &HandResponse,
@@ -1381,7 +1380,7 @@ mod tests {
             dfd: [fd.clone(), fd],
             m_arm: vec![Matrix2::identity(); n],
             s: vec![Matrix2::identity(); n],
-            effort: vec![[0.0; 2]; n],
+            effort: vec![Vector2::zeros(); n],
             jinv: vec![Matrix2::identity(); n],
             rows: (0..n).collect(),
             references: 2,
@@ -1484,26 +1483,21 @@ mod tests {
         // The reference's joint torques rising and falling over the window, as on a
         // reach whose torque swings within it (centred on the rows, as
         // `hand_responses` does), and the arm's J⁻¹ at the reach's middle.
-        let effort: Vec<[f64; 2]> = (0..n)
+        let effort: Vec<Vector2<f64>> = (0..n)
             .map(|i| {
-                [
+                Vector2::new(
                     3.0 * (2.0 * PI * 1.7 * t(i)).sin(),
                     4.0 * (2.0 * PI * 2.9 * t(i) + 0.4).cos(),
-                ]
+                )
             })
             .collect();
-        let mean = |q: usize| effort[100..].iter().map(|e| e[q]).sum::<f64>() / (n - 100) as f64;
-        let (m0, m1) = (mean(0), mean(1));
-        r.effort = effort.iter().map(|e| [e[0] - m0, e[1] - m1]).collect();
+        let mean = effort[100..].iter().sum::<Vector2<f64>>() / (n - 100) as f64;
+        r.effort = effort.iter().map(|e| e - mean).collect();
         r.jinv = vec![Matrix2::new(-2.1, 3.4, 4.8, 0.9); n];
         r.rows = (100..n).collect();
         r
     }
 
-    /// A response built exactly by the baseline's law, with a non-symmetric `D` and `K`
-    /// (what a moving, torque-bearing arm shows), gives those matrices and the feedback
-    /// gain back to round-off: the columns are the law's, in the order the parameters
-    /// are named.
     /// The grip's search crosses the stiffness with the time constant: the settings on
     /// the line of one are every stiffness of the grid, once each and rising, at that
     /// setting's time constant, and the edge rule reads the stiffness's place alone.
@@ -1527,6 +1521,10 @@ mod tests {
         assert!((0..StretchReflex.settings()).all(|s| StretchReflex.on_the_line_of(s, 0)));
     }
 
+    /// A response built exactly by the baseline's law, with a non-symmetric `D` and `K`
+    /// (what a moving, torque-bearing arm shows), gives those matrices and the feedback
+    /// gain back to round-off: the columns are the law's, in the order the parameters
+    /// are named.
     #[test]
     fn baseline_recovers_a_non_symmetric_impedance() {
         let mut r = moving_response();

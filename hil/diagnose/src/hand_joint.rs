@@ -77,6 +77,15 @@ impl HandJoint {
         }
     }
 
+    /// The members with the searched one at setting `s`: what this model names once
+    /// it enters.
+    #[must_use]
+    pub fn members_at(&self, s: usize) -> Vec<HandMember> {
+        let mut members = self.fixed.clone();
+        members.push((self.next.clone(), s));
+        members
+    }
+
     /// `fixed` plus `next`, with the grip's load settled ([`settle_grip_load`]): how
     /// forward selection builds each joint it fits.
     ///

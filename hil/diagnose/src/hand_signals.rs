@@ -181,7 +181,7 @@ pub struct HandResponse {
     /// torque the subject's muscles hold in the unperturbed movement,
     /// `|Jᵀ (F_hand + M_arm a)|` of the reference (what the hand pushes on the handle
     /// plus what accelerates the arm). A joint's muscle impedance grows with it.
-    pub effort: Vec<[f64; 2]>,
+    pub effort: Vec<Vector2<f64>>,
     /// The arm's `J⁻¹` (joint angles per hand displacement) at each sample, rad/m.
     pub jinv: Vec<Matrix2<f64>>,
     /// Evaluated local indices (from the onset to the end of the window).
@@ -324,24 +324,10 @@ fn odd_unit(angle_deg: f64, a: &[&HandResponse], b: &[&HandResponse]) -> HandRes
 /// of the first, the trials and reference counts of all.
 fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResponse {
     let first = terms[0].0;
-    let sum = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| -> Vec<f64> {
-        let mut out = vec![0.0; f(first).len()];
-        for (r, w, _) in terms {
-            for (o, v) in out.iter_mut().zip(f(r)) {
-                *o += w * v;
-            }
-        }
-        out
-    };
-    let sum_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| {
-        let mut out = vec![Matrix2::zeros(); f(first).len()];
-        for (r, _, w) in terms {
-            for (o, v) in out.iter_mut().zip(f(r)) {
-                *o += v * *w;
-            }
-        }
-        out
-    };
+    // The signals take the first weight, the arm's quantities (matrices, the
+    // reference's effort) the second.
+    let sum = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| weighted(terms, false, f);
+    let sum_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| weighted(terms, true, f);
     HandResponse {
         id: first.id,
         rate_hz: first.rate_hz,
@@ -354,16 +340,7 @@ fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResp
         dfd: [sum(&|r| &r.dfd[0]), sum(&|r| &r.dfd[1])],
         m_arm: sum_mat(&|r| &r.m_arm),
         s: sum_mat(&|r| &r.s),
-        effort: {
-            let mut out = vec![[0.0; 2]; first.effort.len()];
-            for (r, _, w) in terms {
-                for (o, v) in out.iter_mut().zip(&r.effort) {
-                    o[0] += w * v[0];
-                    o[1] += w * v[1];
-                }
-            }
-            out
-        },
+        effort: weighted(terms, true, |r| &r.effort),
         jinv: sum_mat(&|r| &r.jinv),
         rows: first.rows.clone(),
         references: terms.iter().map(|(r, _, _)| r.references).sum(),
@@ -372,6 +349,25 @@ fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResp
             .flat_map(|(r, _, _)| r.trials.clone())
             .collect(),
     }
+}
+
+/// `Σ w f(r)` sample by sample over `terms = (r, w, w_arm)`, with `w_arm` for `arm`.
+fn weighted<T>(
+    terms: &[(&HandResponse, f64, f64)],
+    arm: bool,
+    f: impl Fn(&HandResponse) -> &Vec<T>,
+) -> Vec<T>
+where
+    T: Copy + Default + std::ops::Mul<f64, Output = T> + std::ops::AddAssign,
+{
+    let mut out = vec![T::default(); f(terms[0].0).len()];
+    for (r, w, w_arm) in terms {
+        let w = if arm { *w_arm } else { *w };
+        for (o, v) in out.iter_mut().zip(f(r)) {
+            *o += *v * w;
+        }
+    }
+    out
 }
 
 /// One trial's smoothed channels.
@@ -641,16 +637,13 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 let a = Vector2::new(rf[0], rf[1]);
                 let f = Vector2::new(rf[2], rf[3]);
                 let tau = jac.transpose() * (f + m * a);
-                effort.push([tau[0].abs(), tau[1].abs()]);
+                effort.push(tau.abs());
                 jinv.push(ji);
                 m_arm.push(m);
                 s.push(sh);
             }
-            let after = (n - lead) as f64;
-            for q in 0..2 {
-                let mean = effort[lead..].iter().map(|e| e[q]).sum::<f64>() / after;
-                effort.iter_mut().for_each(|e| e[q] -= mean);
-            }
+            let mean = effort[lead..].iter().sum::<Vector2<f64>>() / (n - lead) as f64;
+            effort.iter_mut().for_each(|e| *e -= mean);
             let [x, y, vx, vy, ax, ay, fx, fy, fdx, fdy] = d;
             Ok(Some(HandResponse {
                 id: e.id,
@@ -821,7 +814,7 @@ mod tests {
             dfd: [v.clone(), v],
             m_arm: vec![Matrix2::identity() * value; 4],
             s: vec![Matrix2::identity(); 4],
-            effort: vec![[value; 2]; 4],
+            effort: vec![Vector2::repeat(value); 4],
             jinv: vec![Matrix2::identity(); 4],
             rows: vec![1, 2, 3],
             references: 2,
