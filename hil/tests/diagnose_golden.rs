@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "7a371306eee61012d258cac1b1f3b23423440af853aad316b923795b93804b12",
+        "11683ba00925ed79d8b37144df8045dbdda5a025e6be0ed7b1188a68d4432fc5",
     ),
     (
         "example-friction",
-        "79cb2adc936be0c968acce02e8b77d5dce7a0cbcff348f93e25e642488e15251",
+        "d63bedd0290df0271d38d627805e5224d808b9a59d10d01ec1ac168152d33658",
     ),
     (
         "example-nuisance",
-        "6d1d245686d6566bac965eaf9ee2077eefe7bb052ef13aa6624cecd573d86787",
+        "fddb06d4467f57f460dfc7b2a83a746703cb60675b1032aa0025806a6d13d80e",
     ),
     (
         "example-rotation-mass",
-        "cc36368967f667c81378c380989a0e6851a03153e34d009831f5551f7ccfae64",
+        "f94ef6c95276d817582b1705ad14a6e28f489220ca5d9232ccdc3416720c3004",
     ),
 ];
 

@@ -43,12 +43,15 @@
 //! The tables' `M_arm` is not the subject's ([`ARM_INERTIA_TOLERANCE`]), and the
 //! subject's impedance is not constant over the window when the reach's torque swings
 //! within it (a fast reach). [`SubjectArm`], the baseline plus `c M_arm Δa_h` with `|c|`
-//! within that tolerance plus, at each joint `q`, a stiffness `κ_q e_q` and a damping
-//! `β_q e_q` that follow `e_q`, the change over the window of the joint torque the
-//! reference holds ([`HandResponse::effort`]), is a rival: a handle mass or a grip, given
-//! the same `κ`, `β` columns, must explain the responses better than it as well as
-//! better than the baseline, and the hand's library is judged given its inertia and then
-//! its rates, each where it passes against the named effects. It is never a cause.
+//! within that tolerance plus the arm's impedance linearised along the reference's own
+//! activations (per muscle pair a stiffness and a damping per newton of the activation
+//! the torque split gives the torque the reference holds, [`HandResponse::activation`])
+//! and the rigid-body impedance of that held torque ([`HandResponse::held`]), is a
+//! rival: a handle mass or a grip, given the same rates, must explain the responses
+//! better than it as well as better than the baseline, and a handle's mass fitted
+//! beside the rates must still be material; the hand's library is judged given its
+//! inertia and then its rates, each where it passes against the named effects. It is
+//! never a cause.
 //!
 //! The target of every fit is `−ΔF_hand − M_arm Δa_h` and the normaliser `ΔF_hand`: the
 //! NRMSE is the error of predicting the hand's response force.
@@ -96,7 +99,8 @@ use super::crossval::{CvFit, Folds, cross_validate};
 use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::hand_signals::{
-    HandArm, HandData, HandResponse, OddUnits, average_by_angle, hand_responses, lagged, odd_parts,
+    HandArm, HandData, HandResponse, MUSCLE_PAIRS, OddUnits, average_by_angle, hand_responses,
+    lagged, odd_parts,
 };
 use rigtwin_session::{Axes, Session};
 
@@ -836,17 +840,23 @@ impl HandCandidate for HandleMass {
     }
 }
 
-/// The columns of [`SubjectArm`]'s impedance rates: per joint (shoulder, elbow) the
-/// stiffness and then the damping per N m of effort.
-pub const IMPEDANCE_RATE_COLUMNS: usize = 4;
+/// The columns of [`SubjectArm`]'s impedance rates: per muscle pair (shoulder, elbow,
+/// two-joint) the stiffness and then the damping per newton of activation, then the
+/// scales of the held torque's stiffness and damping.
+pub const IMPEDANCE_RATE_COLUMNS: usize = 2 * MUSCLE_PAIRS + 2;
 
-/// The names of [`SubjectArm`]'s rates, in column order: a joint's stiffness (N m/rad)
-/// and damping (N m s/rad) per N m of the torque it holds.
+/// The names of [`SubjectArm`]'s rates, in column order: a muscle's stiffness (N/m)
+/// and damping (N s/m) per newton of its activation, per pair, and the two scales of
+/// the held torque's impedance (1 for an arm of the tables).
 pub const RATE_PARAMETERS: [&str; IMPEDANCE_RATE_COLUMNS] = [
-    "shoulder_stiffness_per_torque_per_rad",
-    "elbow_stiffness_per_torque_per_rad",
-    "shoulder_damping_per_torque_s_per_rad",
-    "elbow_damping_per_torque_s_per_rad",
+    "shoulder_muscle_stiffness_per_activation_per_m",
+    "elbow_muscle_stiffness_per_activation_per_m",
+    "two_joint_muscle_stiffness_per_activation_per_m",
+    "shoulder_muscle_damping_per_activation_s_per_m",
+    "elbow_muscle_damping_per_activation_s_per_m",
+    "two_joint_muscle_damping_per_activation_s_per_m",
+    "held_torque_stiffness_scale",
+    "held_torque_damping_scale",
 ];
 
 /// The rival a heavier handle and a grip are judged against besides the baseline, and
@@ -857,24 +867,26 @@ pub const RATE_PARAMETERS: [&str; IMPEDANCE_RATE_COLUMNS] = [
 ///   the shared layout's long pulses an arm 15 % heavier reads as a heavier handle of
 ///   0.15–0.21 kg, and one 15–20 % lighter as a short reflex (11–13 ms: `g δ S Δa`
 ///   lowers the inertia).
-/// - Its impedance following its effort over the window: at joint `q` (shoulder,
-///   elbow) a stiffness `κ_q e_q` and a damping `β_q e_q`, with `e_q` the reference's
-///   joint torque magnitude less its mean over the window ([`HandResponse::effort`],
-///   N m), so at the hand `J⁻ᵀ diag(κ e) J⁻¹ Δx_h + J⁻ᵀ diag(β e) J⁻¹ Δv_h`. A
-///   muscle's stiffness and damping grow with its activation (the arm's
-///   `K_m = K₀ + K₁ a`; a joint's stiffness grows in proportion to the torque it holds,
+/// - Its impedance following the reach's activations over the window, as the arm's
+///   own law has it, linearised along the unperturbed movement. Per muscle pair `p`
+///   (shoulder, elbow, two-joint) a stiffness `κ_p` and a damping `β_p` per newton of
+///   activation times [`HandResponse::activation`], the pair's activations from the
+///   arm's torque split of the joint torque the reference holds: a muscle's
+///   `K_m = K₀ + K₁ a` (the arm's; a joint's stiffness grows with the torque it holds
 ///   in people as well: Bennett et al. 1992 at the elbow during movement, Gomi & Kawato
-///   1997 at the hand), and an antagonist pair's summed activation follows the
-///   magnitude of its joint's torque. Four coefficients tied to the reference's own
-///   torque, whose change over the window differs between pulses by where in the reach
-///   each came (rising, falling, steady): they cannot stand in for an inertia, as the
-///   time itself as the coordinate could (on pulses of one shape a coefficient on `Δv`
-///   changing linearly in time imitates one). On a 1 s reach the window is a third of
-///   the movement and the torque swings within it by more than the co-contraction, and
-///   a constant impedance leaves a misfit a heavier handle takes up (README, "Reaches
-///   much faster than 3 s"). Not in the baseline: free columns there take up part of
-///   the shared layout's reflexes, whose evidence is as smooth
-///   (`hil/docs/notes/2026-12-05-fast-reaches.md`).
+///   1997 at the hand). And the rigid-body part the baseline's constant `D`, `K` leave:
+///   how the hand's force changes with its motion while the muscles hold that torque
+///   ([`HandResponse::held`]: the turning geometry, the configuration-dependent
+///   inertia, Coriolis and centripetal forces), each with a free scale. Eight
+///   coefficients on the reference's own activations and torque, which differ between
+///   pulses by where in the reach each came (rising, falling, changing muscle), so they
+///   cannot stand in for an inertia, as the time itself as the coordinate could. On a
+///   1 s reach the activations swing within the window by many times the
+///   co-contraction: on quiet sessions of such reaches the baseline's error is 13–15 %
+///   of the response, and this rival's 1–1.5 % with the arm's inertia within 3 % of
+///   the tables (README, "Reaches much faster than 3 s"). Not in the baseline: free
+///   columns there take up part of the shared layout's reflexes, whose evidence is as
+///   smooth (`hil/docs/notes/2026-12-05-fast-reaches.md`).
 ///
 /// A heavier handle or a grip is judged against it with the same rates beside it
 /// ([`SubjectArm::RATES`]), so that what the two are compared on is the inertia alone:
@@ -942,9 +954,10 @@ impl HandCandidate for SubjectArm {
     fn rows(&self, r: &HandResponse, s: usize, fb: f64, f: &mut dyn FnMut(&[f64], f64, f64)) {
         effect_rows(self, r, s, fb, f);
     }
-    /// Row `axis` of `J⁻ᵀ diag(e) J⁻¹ Δx_h` per joint's `κ`, and of the same with `Δv_h`
-    /// per joint's `β` (with the rates), then the arm's own inertial force at the handle,
-    /// `c` times `M_arm Δa` (the balance already carries `M_arm Δa` once).
+    /// Row `axis` of each pair's activation shape times `Δx_h` (its `κ`) and times `Δv_h`
+    /// (its `β`), and of the held torque's `G_x Δx_h` and `G_v Δv_h` (with the rates),
+    /// then the arm's own inertial force at the handle, `c` times `M_arm Δa` (the balance
+    /// already carries `M_arm Δa` once).
     fn extra(
         &self,
         r: &HandResponse,
@@ -955,21 +968,20 @@ impl HandCandidate for SubjectArm {
         out: &mut [f64],
     ) {
         if self.rates {
-            let (e, ji) = (r.effort[j], r.jinv[j]);
-            let dq = ji * Vector2::new(kin.x[0][j], kin.x[1][j]);
-            let dqd = ji * Vector2::new(kin.v[0][j], kin.v[1][j]);
-            for q in 0..2 {
-                // (J⁻ᵀ)[axis][q] carries joint q's torque to the hand.
-                let lever = e[q] * ji[(q, axis)];
-                out[q] = lever * dq[q];
-                out[2 + q] = lever * dqd[q];
+            let x = Vector2::new(kin.x[0][j], kin.x[1][j]);
+            let v = Vector2::new(kin.v[0][j], kin.v[1][j]);
+            for (p, shape) in r.activation.iter().enumerate() {
+                out[p] = (shape[j] * x)[axis];
+                out[MUSCLE_PAIRS + p] = (shape[j] * v)[axis];
             }
+            out[2 * MUSCLE_PAIRS] = (r.held[0][j] * x)[axis];
+            out[2 * MUSCLE_PAIRS + 1] = (r.held[1][j] * v)[axis];
         }
         if self.inertia {
             out[self.rate_columns()] = (r.m_arm[j] * Vector2::new(kin.a[0][j], kin.a[1][j]))[axis];
         }
     }
-    /// The inertia's scale first, then the rates (per N m of the joint's torque).
+    /// The inertia's scale first, then the rates.
     fn parameters(&self, _s: usize, beta: &[f64], _fb: f64) -> Vec<(String, f64)> {
         let own = beta.get(base_columns()..).unwrap_or(&[]);
         let g = |i: usize| own.get(i).copied().unwrap_or(f64::NAN);
@@ -1380,8 +1392,8 @@ mod tests {
             dfd: [fd.clone(), fd],
             m_arm: vec![Matrix2::identity(); n],
             s: vec![Matrix2::identity(); n],
-            effort: vec![Vector2::zeros(); n],
-            jinv: vec![Matrix2::identity(); n],
+            activation: std::array::from_fn(|_| vec![Matrix2::zeros(); n]),
+            held: std::array::from_fn(|_| vec![Matrix2::zeros(); n]),
             rows: (0..n).collect(),
             references: 2,
             trials: vec![1],
@@ -1395,9 +1407,10 @@ mod tests {
     /// the tables' inertia.
     struct ArmLaw {
         d: Matrix2<f64>,
-        d_rate: [f64; 2],
+        d_rate: [f64; MUSCLE_PAIRS],
         k: Matrix2<f64>,
-        k_rate: [f64; 2],
+        k_rate: [f64; MUSCLE_PAIRS],
+        held: [f64; 2],
         p: f64,
         c: f64,
         fb: f64,
@@ -1407,9 +1420,10 @@ mod tests {
         fn default() -> ArmLaw {
             ArmLaw {
                 d: Matrix2::new(12.0, -3.0, 5.0, 9.0),
-                d_rate: [0.0; 2],
+                d_rate: [0.0; MUSCLE_PAIRS],
                 k: Matrix2::new(420.0, 60.0, -140.0, 310.0),
-                k_rate: [0.0; 2],
+                k_rate: [0.0; MUSCLE_PAIRS],
+                held: [0.0; 2],
                 p: 480.0,
                 c: 0.0,
                 fb: 0.06,
@@ -1431,19 +1445,17 @@ mod tests {
                 let a = Vector2::new(r.da[0][j], r.da[1][j]);
                 let xl = Vector2::new(lagged(&r.dx[0], j, lag), lagged(&r.dx[1], j, lag));
                 let vl = Vector2::new(lagged(&r.dv[0], j, lag), lagged(&r.dv[1], j, lag));
-                let (e, ji) = (r.effort[j], r.jinv[j]);
-                let kq = Matrix2::from_diagonal(&Vector2::new(
-                    self.k_rate[0] * e[0],
-                    self.k_rate[1] * e[1],
-                ));
-                let dq = Matrix2::from_diagonal(&Vector2::new(
-                    self.d_rate[0] * e[0],
-                    self.d_rate[1] * e[1],
-                ));
+                let (kh, dh) = r.activation.iter().enumerate().fold(
+                    (self.held[0] * r.held[0][j], self.held[1] * r.held[1][j]),
+                    |(k, d), (p, shape)| {
+                        (k + self.k_rate[p] * shape[j], d + self.d_rate[p] * shape[j])
+                    },
+                );
                 let f = -((1.0 + self.c) * r.m_arm[j] * a
                     + self.d * v
                     + self.k * x
-                    + ji.transpose() * (dq * ji * v + kq * ji * x)
+                    + kh * x
+                    + dh * v
                     + self.p * r.s[j] * (xl + rho * vl));
                 r.df[0][j] = f[0];
                 r.df[1][j] = f[1];
@@ -1480,20 +1492,27 @@ mod tests {
         let sh = Matrix2::new(0.07, 0.02, 0.02, 0.05);
         r.m_arm = vec![m; n];
         r.s = vec![sh; n];
-        // The reference's joint torques rising and falling over the window, as on a
-        // reach whose torque swings within it (centred on the rows, as
-        // `hand_responses` does), and the arm's J⁻¹ at the reach's middle.
-        let effort: Vec<Vector2<f64>> = (0..n)
-            .map(|i| {
-                Vector2::new(
-                    3.0 * (2.0 * PI * 1.7 * t(i)).sin(),
-                    4.0 * (2.0 * PI * 2.9 * t(i) + 0.4).cos(),
-                )
-            })
-            .collect();
-        let mean = effort[100..].iter().sum::<Vector2<f64>>() / (n - 100) as f64;
-        r.effort = effort.iter().map(|e| e - mean).collect();
-        r.jinv = vec![Matrix2::new(-2.1, 3.4, 4.8, 0.9); n];
+        // The pairs' activation shapes and the held torque's impedance rising and
+        // falling over the window, as on a reach whose torque swings within it, each with
+        // its own time course and direction (centred on the rows, as `hand_responses`
+        // does): N for the shapes (50 N of activation on moment arms of 4–5 cm at J⁻¹ of
+        // about 3 rad/m), N/m and N s/m for the held torque's.
+        let swing = |f: f64, ph: f64, m: Matrix2<f64>| -> Vec<Matrix2<f64>> {
+            let series: Vec<Matrix2<f64>> = (0..n)
+                .map(|i| m * (2.0 * PI * f * t(i) + ph).sin())
+                .collect();
+            let mean = series[100..].iter().sum::<Matrix2<f64>>() / (n - 100) as f64;
+            series.iter().map(|e| e - mean).collect()
+        };
+        r.activation = [
+            swing(1.7, 0.0, Matrix2::new(0.9, 0.3, 0.3, 0.4)),
+            swing(2.9, 0.4, Matrix2::new(0.2, -0.1, -0.1, 1.1)),
+            swing(0.8, 1.1, Matrix2::new(0.6, 0.5, 0.5, 0.7)),
+        ];
+        r.held = [
+            swing(2.3, 0.7, Matrix2::new(30.0, -12.0, 8.0, 25.0)),
+            swing(1.2, 2.0, Matrix2::new(1.5, 0.4, -0.6, 2.0)),
+        ];
         r.rows = (100..n).collect();
         r
     }
@@ -1594,12 +1613,13 @@ mod tests {
     #[test]
     fn the_subject_arm_recovers_an_impedance_changing_over_the_window() {
         let mut r = moving_response();
-        // Per N m of torque: with the response's ±3–4 N m swing the joints' stiffness
-        // changes by about ±25 N m/rad and their damping by ±0.4 N m s/rad, as the
-        // arm's K_m = K0 + K1 a does on a 1 s reach.
+        // Per newton of activation, as the arm's K_m = K₀ + K₁ a with K₁ = 100 /m and
+        // damping times of 10–120 ms gives; the held torque's impedance as the tables
+        // give it (scale 1) and 20 % low.
         let law = ArmLaw {
-            d_rate: [0.12, 0.08],
-            k_rate: [6.0, 9.0],
+            d_rate: [12.0, 1.0, 8.0],
+            k_rate: [90.0, 120.0, 70.0],
+            held: [1.0, 0.8],
             c: 0.12,
             ..ArmLaw::default()
         };
@@ -1623,8 +1643,12 @@ mod tests {
             ("arm_inertia_scale", 1.0 + c),
             (RATE_PARAMETERS[0], k_rate[0]),
             (RATE_PARAMETERS[1], k_rate[1]),
-            (RATE_PARAMETERS[2], d_rate[0]),
-            (RATE_PARAMETERS[3], d_rate[1]),
+            (RATE_PARAMETERS[2], k_rate[2]),
+            (RATE_PARAMETERS[3], d_rate[0]),
+            (RATE_PARAMETERS[4], d_rate[1]),
+            (RATE_PARAMETERS[5], d_rate[2]),
+            (RATE_PARAMETERS[6], law.held[0]),
+            (RATE_PARAMETERS[7], law.held[1]),
         ];
         for (name, value) in want {
             let v = got.get(name).copied().unwrap_or(f64::NAN);

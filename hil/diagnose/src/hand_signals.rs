@@ -40,8 +40,9 @@
 //! before it for the delayed terms.
 
 use nalgebra::{Matrix2, Vector2};
+use rigtwin_arm::dynamics::inverse_dynamics;
 use rigtwin_arm::impedance::{endpoint_inertia, joint_to_endpoint};
-use rigtwin_arm::kinematics::{Elbow, inverse, jacobian};
+use rigtwin_arm::kinematics::{Elbow, inverse, jacobian, jacobian_dot};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
 use rigtwin_arm::params::ArmParams;
 use rigtwin_device::signal::{EdgeMode, gradient, savgol_filter};
@@ -74,6 +75,9 @@ pub struct HandArm {
     pub shoulder_m: [f64; 2],
     /// `Aᵀ diag(w) A` with `w` the `odd_part_weights`, m² (joint space).
     pub ata: Matrix2<f64>,
+    /// The arm's six muscles: their moment arms and the torque split that gives each
+    /// its activation.
+    pub muscles: MuscleModel,
 }
 
 impl HandArm {
@@ -98,6 +102,7 @@ impl HandArm {
             MuscleModel::new(&params.muscles).map_err(|e| err(format!("arm muscles: {e}")))?;
         Ok(HandArm {
             ata: model.to_joint(&odd_part_weights(&model)),
+            muscles: model,
             params,
             shoulder_m: s.shoulder_m,
         })
@@ -111,15 +116,121 @@ impl HandArm {
             hand_rig_m[1] - self.shoulder_m[1],
         );
         let q = inverse(&self.params, p, Elbow::Down).ok()?;
-        let j = jacobian(&self.params, q);
         Some(ArmPosture {
             m_arm: endpoint_inertia(&self.params, q).ok()?,
             s: joint_to_endpoint(&self.params, q, &self.ata).ok()?,
+            jinv: jacobian(&self.params, q).try_inverse()?,
+        })
+    }
+
+    /// The joint torque the muscles hold (shoulder, elbow), N m, for the hand at `x`
+    /// (rig frame) moving at `v` and accelerating at `a` while it pushes the handle with
+    /// `f`, N: `τ = Jᵀ f + M(q) q̈ + C(q, q̇) q̇`, the arm's rigid-body dynamics from the
+    /// tables. `None` out of reach or singular.
+    #[must_use]
+    pub fn torque(
+        &self,
+        x: Vector2<f64>,
+        v: Vector2<f64>,
+        a: Vector2<f64>,
+        f: Vector2<f64>,
+    ) -> Option<Vector2<f64>> {
+        let m = self.joint_motion(x, v, a)?;
+        Some(m.j.transpose() * f + inverse_dynamics(&self.params, m.q, m.qd, m.qdd))
+    }
+
+    /// The force the hand pushes the handle with, N, at hand motion `x, v, a` while the
+    /// muscles hold the joint torque `tau`: `J⁻ᵀ (τ − M(q) q̈ − C(q, q̇) q̇)`, the inverse
+    /// of [`HandArm::torque`]. `None` out of reach or singular.
+    #[must_use]
+    pub fn hand_force(
+        &self,
+        x: Vector2<f64>,
+        v: Vector2<f64>,
+        a: Vector2<f64>,
+        tau: Vector2<f64>,
+    ) -> Option<Vector2<f64>> {
+        let m = self.joint_motion(x, v, a)?;
+        let rest = tau - inverse_dynamics(&self.params, m.q, m.qd, m.qdd);
+        Some(m.j.transpose().try_inverse()? * rest)
+    }
+
+    /// `−∂F/∂x` and `−∂F/∂v` of [`HandArm::hand_force`] at the torque `tau` (central
+    /// differences of 0.1 mm and 0.1 mm/s), N/m and N s/m: how the hand's force changes
+    /// with its motion while the muscles hold their torque (the arm's turning geometry,
+    /// its configuration-dependent inertia and its Coriolis and centripetal forces).
+    #[must_use]
+    pub fn held_torque_impedance(
+        &self,
+        x: Vector2<f64>,
+        v: Vector2<f64>,
+        a: Vector2<f64>,
+        tau: Vector2<f64>,
+    ) -> Option<[Matrix2<f64>; 2]> {
+        const H: f64 = 1e-4;
+        let mut out = [Matrix2::zeros(); 2];
+        for k in 0..2 {
+            let e = Vector2::ith(k, H);
+            let dx = self.hand_force(x + e, v, a, tau)? - self.hand_force(x - e, v, a, tau)?;
+            let dv = self.hand_force(x, v + e, a, tau)? - self.hand_force(x, v - e, a, tau)?;
+            out[0].set_column(k, &(-dx / (2.0 * H)));
+            out[1].set_column(k, &(-dv / (2.0 * H)));
+        }
+        Some(out)
+    }
+
+    /// The joint motion of a hand motion (position, velocity, acceleration).
+    fn joint_motion(
+        &self,
+        x: Vector2<f64>,
+        v: Vector2<f64>,
+        a: Vector2<f64>,
+    ) -> Option<JointMotion> {
+        let p = Vector2::new(x[0] - self.shoulder_m[0], x[1] - self.shoulder_m[1]);
+        let q = inverse(&self.params, p, Elbow::Down).ok()?;
+        let j = jacobian(&self.params, q);
+        let ji = j.try_inverse()?;
+        let qd = ji * v;
+        let qdd = ji * (a - jacobian_dot(&self.params, q, [qd[0], qd[1]]) * qd);
+        Some(JointMotion {
+            q,
+            qd: [qd[0], qd[1]],
+            qdd: [qdd[0], qdd[1]],
             j,
-            jinv: j.try_inverse()?,
+        })
+    }
+
+    /// Per muscle pair ([`MUSCLE_PAIRS`]), `J⁻ᵀ Aᵀ diag(a) A J⁻¹` at the hand, N, with `a`
+    /// the pair's activations (the other muscles' zero) that the arm's torque split
+    /// gives the joint torque `tau` over the co-contraction of level 1.
+    #[must_use]
+    pub fn pair_activation_shapes(
+        &self,
+        tau: Vector2<f64>,
+        jinv: &Matrix2<f64>,
+    ) -> [Matrix2<f64>; MUSCLE_PAIRS] {
+        let act = self
+            .muscles
+            .split([tau[0], tau[1]], &self.muscles.co_contraction(1.0));
+        std::array::from_fn(|p| {
+            let w: [f64; MUSCLES] = std::array::from_fn(|i| if i / 2 == p { act[i] } else { 0.0 });
+            jinv.transpose() * self.muscles.to_joint(&w) * jinv
         })
     }
 }
+
+/// The arm's joint angles, rates (rad, rad/s) and accelerations (rad/s²) and its
+/// Jacobian (m/rad) for one hand motion.
+struct JointMotion {
+    q: [f64; 2],
+    qd: [f64; 2],
+    qdd: [f64; 2],
+    j: Matrix2<f64>,
+}
+
+/// The arm's muscles in antagonist pairs, in its order: shoulder (SF, SE), elbow (EF,
+/// EE), two-joint (BF, BE).
+pub const MUSCLE_PAIRS: usize = 3;
 
 /// What the hand balance takes from the arm's tables at one handle position.
 #[derive(Debug, Clone, Copy)]
@@ -128,9 +239,7 @@ pub struct ArmPosture {
     pub m_arm: Matrix2<f64>,
     /// Feedback shape `S`, dimensionless.
     pub s: Matrix2<f64>,
-    /// Jacobian `J = ∂x/∂q`, m/rad.
-    pub j: Matrix2<f64>,
-    /// `J⁻¹`, rad/m.
+    /// `J⁻¹` (joint angles per hand displacement), rad/m.
     pub jinv: Matrix2<f64>,
 }
 
@@ -176,14 +285,17 @@ pub struct HandResponse {
     pub m_arm: Vec<Matrix2<f64>>,
     /// Feedback shape `S` at each sample, dimensionless.
     pub s: Vec<Matrix2<f64>>,
-    /// The reference's effort at each joint (shoulder, elbow) and sample less its mean
-    /// over the window after the onset, N m: the effort is the magnitude of the joint
-    /// torque the subject's muscles hold in the unperturbed movement,
-    /// `|Jᵀ (F_hand + M_arm a)|` of the reference (what the hand pushes on the handle
-    /// plus what accelerates the arm). A joint's muscle impedance grows with it.
-    pub effort: Vec<Vector2<f64>>,
-    /// The arm's `J⁻¹` (joint angles per hand displacement) at each sample, rad/m.
-    pub jinv: Vec<Matrix2<f64>>,
+    /// Per muscle pair ([`MUSCLE_PAIRS`]) and sample, how the pair's activation in the
+    /// unperturbed movement shapes an impedance at the hand, less its mean over the
+    /// window after the onset, N: [`HandArm::pair_activation_shapes`] of the joint torque
+    /// the reference holds ([`HandArm::torque`] of its motion and hand force). A
+    /// muscle's stiffness grows with its activation (`K_m = K₀ + K₁ a`), so a stiffness
+    /// `κ_p` (1/m) per pair makes `κ_p` times this at the hand, N/m.
+    pub activation: [Vec<Matrix2<f64>>; MUSCLE_PAIRS],
+    /// Per sample, `−∂F_hand/∂x` (N/m) and `−∂F_hand/∂v` (N s/m) at the torque the
+    /// reference holds ([`HandArm::held_torque_impedance`]), less their mean over the
+    /// window after the onset.
+    pub held: [Vec<Matrix2<f64>>; 2],
     /// Evaluated local indices (from the onset to the end of the window).
     pub rows: Vec<usize>,
     /// Unperturbed trials in the reference (summed over the averaged trials).
@@ -324,8 +436,7 @@ fn odd_unit(angle_deg: f64, a: &[&HandResponse], b: &[&HandResponse]) -> HandRes
 /// of the first, the trials and reference counts of all.
 fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResponse {
     let first = terms[0].0;
-    // The signals take the first weight, the arm's quantities (matrices, the
-    // reference's effort) the second.
+    // The signals take the first weight, the arm's matrices the second.
     let sum = |f: &dyn Fn(&HandResponse) -> &Vec<f64>| weighted(terms, false, f);
     let sum_mat = |f: &dyn Fn(&HandResponse) -> &Vec<Matrix2<f64>>| weighted(terms, true, f);
     HandResponse {
@@ -340,8 +451,8 @@ fn weighted_sum(angle_deg: f64, terms: &[(&HandResponse, f64, f64)]) -> HandResp
         dfd: [sum(&|r| &r.dfd[0]), sum(&|r| &r.dfd[1])],
         m_arm: sum_mat(&|r| &r.m_arm),
         s: sum_mat(&|r| &r.s),
-        effort: weighted(terms, true, |r| &r.effort),
-        jinv: sum_mat(&|r| &r.jinv),
+        activation: std::array::from_fn(|p| sum_mat(&|r| &r.activation[p])),
+        held: std::array::from_fn(|k| sum_mat(&|r| &r.held[k])),
         rows: first.rows.clone(),
         references: terms.iter().map(|(r, _, _)| r.references).sum(),
         trials: terms
@@ -621,29 +732,47 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             }
             let mut m_arm = Vec::with_capacity(n);
             let mut s = Vec::with_capacity(n);
-            let mut effort = Vec::with_capacity(n);
-            let mut jinv = Vec::with_capacity(n);
+            let mut activation: [Vec<Matrix2<f64>>; MUSCLE_PAIRS] =
+                std::array::from_fn(|_| Vec::with_capacity(n));
+            let mut held: [Vec<Matrix2<f64>>; 2] = std::array::from_fn(|_| Vec::with_capacity(n));
             for (j, rf) in reference.iter().enumerate() {
                 let i = k0 - lead + j;
                 let Some(ArmPosture {
                     m_arm: m,
                     s: sh,
-                    j: jac,
                     jinv: ji,
+                    ..
                 }) = arm.at([p.ch[0][i], p.ch[1][i]])
                 else {
                     return Ok(None);
                 };
+                // The reference's own motion and hand force at this sample.
+                let x = Vector2::new(p.ch[0][i] - d[0][j], p.ch[1][i] - d[1][j]);
+                let v = Vector2::new(p.ch[2][i] - d[2][j], p.ch[3][i] - d[3][j]);
                 let a = Vector2::new(rf[0], rf[1]);
                 let f = Vector2::new(rf[2], rf[3]);
-                let tau = jac.transpose() * (f + m * a);
-                effort.push(tau.abs());
-                jinv.push(ji);
+                let Some(tau) = arm.torque(x, v, a, f) else {
+                    return Ok(None);
+                };
+                let Some(g) = arm.held_torque_impedance(x, v, a, tau) else {
+                    return Ok(None);
+                };
+                for (out, shape) in activation
+                    .iter_mut()
+                    .zip(arm.pair_activation_shapes(tau, &ji))
+                {
+                    out.push(shape);
+                }
+                for (out, g) in held.iter_mut().zip(g) {
+                    out.push(g);
+                }
                 m_arm.push(m);
                 s.push(sh);
             }
-            let mean = effort[lead..].iter().sum::<Vector2<f64>>() / (n - lead) as f64;
-            effort.iter_mut().for_each(|e| *e -= mean);
+            for series in activation.iter_mut().chain(held.iter_mut()) {
+                let mean = series[lead..].iter().sum::<Matrix2<f64>>() / (n - lead) as f64;
+                series.iter_mut().for_each(|e| *e -= mean);
+            }
             let [x, y, vx, vy, ax, ay, fx, fy, fdx, fdy] = d;
             Ok(Some(HandResponse {
                 id: e.id,
@@ -657,8 +786,8 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                 dfd: [fdx, fdy],
                 m_arm,
                 s,
-                effort,
-                jinv,
+                activation,
+                held,
                 rows: (lead..n).step_by(decim).collect(),
                 references: aligned.len(),
                 trials: vec![e.id],
@@ -814,8 +943,8 @@ mod tests {
             dfd: [v.clone(), v],
             m_arm: vec![Matrix2::identity() * value; 4],
             s: vec![Matrix2::identity(); 4],
-            effort: vec![Vector2::repeat(value); 4],
-            jinv: vec![Matrix2::identity(); 4],
+            activation: std::array::from_fn(|_| vec![Matrix2::identity() * value; 4]),
+            held: std::array::from_fn(|_| vec![Matrix2::identity() * value; 4]),
             rows: vec![1, 2, 3],
             references: 2,
             trials: vec![id],
@@ -898,6 +1027,7 @@ mod tests {
             params: ArmParams::default(),
             shoulder_m: [0.0, -0.425],
             ata: model.to_joint(&odd_part_weights(&model)),
+            muscles: model,
         };
         let Some(ArmPosture { m_arm: m, s, .. }) = arm.at([0.0, 0.0]) else {
             panic!("the workspace centre is reachable");
@@ -909,6 +1039,86 @@ mod tests {
         assert!(s.determinant() > 0.0 && s[(0, 0)] > 0.0);
         // An arm of 3.45 kg cannot feel heavier than its mass at the hand in every direction.
         assert!(m.symmetric_eigenvalues().min() < 3.45);
+    }
+
+    fn default_arm() -> HandArm {
+        let Ok(model) = MuscleModel::new(&ArmParams::default().muscles) else {
+            panic!("the default muscles are valid");
+        };
+        HandArm {
+            params: ArmParams::default(),
+            shoulder_m: [0.0, -0.425],
+            ata: model.to_joint(&odd_part_weights(&model)),
+            muscles: model,
+        }
+    }
+
+    /// The torque a hand motion and force need, and the force that torque makes at that
+    /// motion, are each other's inverse (to 1e-9 N, round-off of two 2×2 solves), on a
+    /// fast reach's motion (0.6 m/s, 4 m/s², 12 N).
+    #[test]
+    fn the_held_torque_gives_the_hand_force_back() {
+        let arm = default_arm();
+        let (x, v, a, f) = (
+            Vector2::new(0.03, -0.02),
+            Vector2::new(0.1, 0.6),
+            Vector2::new(-1.0, 4.0),
+            Vector2::new(2.0, 12.0),
+        );
+        let Some(tau) = arm.torque(x, v, a, f) else {
+            panic!("reachable");
+        };
+        let Some(back) = arm.hand_force(x, v, a, tau) else {
+            panic!("reachable");
+        };
+        assert!((back - f).norm() < 1e-9, "{back} vs {f}");
+    }
+
+    /// At rest the hand force is `J⁻ᵀ τ`, so the held torque's stiffness is
+    /// `−Σ_m ∂(J⁻ᵀ)/∂q_m τ (J⁻¹)_m·` with `∂(J⁻ᵀ)/∂q_m = −J⁻ᵀ (∂J/∂q_m)ᵀ J⁻ᵀ` from
+    /// the two-link Jacobian's closed-form partials; the central difference of 0.1 mm
+    /// agrees to 1e-5 N/m (its truncation error, O(h²) of a term of ~50 N/m). Its damping
+    /// at rest is zero: the Coriolis and centripetal torques are quadratic in `q̇`.
+    #[test]
+    fn the_held_torque_stiffness_at_rest_is_the_turning_jacobian() {
+        let arm = default_arm();
+        let x = Vector2::new(0.02, 0.05);
+        let tau = Vector2::new(4.0, -2.5);
+        let z = Vector2::zeros();
+        let Some([gx, gv]) = arm.held_torque_impedance(x, z, z, tau) else {
+            panic!("reachable");
+        };
+        let p = &arm.params;
+        let (l1, l2) = (p.upper.length_m, p.fore.length_m);
+        let Ok(q) = inverse(p, x - Vector2::from(arm.shoulder_m), Elbow::Down) else {
+            panic!("reachable");
+        };
+        let (s1, c1) = q[0].sin_cos();
+        let (s12, c12) = (q[0] + q[1]).sin_cos();
+        let dj = [
+            Matrix2::new(
+                -l1 * c1 - l2 * c12,
+                -l2 * c12,
+                -l1 * s1 - l2 * s12,
+                -l2 * s12,
+            ),
+            Matrix2::new(-l2 * c12, -l2 * c12, -l2 * s12, -l2 * s12),
+        ];
+        let Some(ji) = jacobian(p, q).try_inverse() else {
+            panic!("not singular");
+        };
+        let jit = ji.transpose();
+        let mut want = Matrix2::zeros();
+        for (m, djm) in dj.iter().enumerate() {
+            let d_jit_tau = -(jit * djm.transpose() * jit) * tau;
+            for k in 0..2 {
+                want[(0, k)] -= d_jit_tau[0] * ji[(m, k)];
+                want[(1, k)] -= d_jit_tau[1] * ji[(m, k)];
+            }
+        }
+        assert!((gx - want).abs().max() < 1e-5, "{gx} vs {want}");
+        assert!(want.abs().max() > 1.0, "a test of something: {want}");
+        assert!(gv.abs().max() < 1e-6, "{gv}");
     }
 
     /// The default arm tones its four monoarticular muscles (shoulder and elbow flexors
