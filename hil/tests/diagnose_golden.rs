@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "11683ba00925ed79d8b37144df8045dbdda5a025e6be0ed7b1188a68d4432fc5",
+        "7566a1b954493faddc37971721b5a269cfde70c3a86a09cf9ca5902067690d9b",
     ),
     (
         "example-friction",
-        "d63bedd0290df0271d38d627805e5224d808b9a59d10d01ec1ac168152d33658",
+        "f6afa99c49226b8f293ac4718b79cc5848b4af55f47846e34aa69e52acd15b2c",
     ),
     (
         "example-nuisance",
-        "fddb06d4467f57f460dfc7b2a83a746703cb60675b1032aa0025806a6d13d80e",
+        "3e9a2a5737a5fdd6b6b2ad20d87cd8360c91623e135844c99a5c037d76fe93f5",
     ),
     (
         "example-rotation-mass",
-        "f94ef6c95276d817582b1705ad14a6e28f489220ca5d9232ccdc3416720c3004",
+        "c6fe08ac9f05dfbef8c1a2b83e979a882ea075a236bc133bdae28bba0bf6f8d1",
     ),
 ];
 

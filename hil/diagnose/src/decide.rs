@@ -19,7 +19,9 @@
 //! ripple pitch at 5 or 100 mm, an angle at ±45°, a reflex delay at 10 or 50 ms, a grip
 //! at 0.5 or 50 kN/m, a friction knee at its softest 10 mm/s) says the law was pushed to
 //! fit something else; it is not named. A friction knee at the sharpest setting is the
-//! sign-function limit of the law, not an edge.
+//! sign-function limit of the law, not an edge. A grip whose range of stiffnesses the
+//! folds cannot tell apart reaches 50 kN/m is not told from a rigid grip
+//! ([`unbounded_grip`]).
 //!
 //! **Not leaning on the motor gains' bound.** The nominal balance holds each motor's
 //! force gain within a force constant's ±10 % ([`MOTOR_GAIN_TOLERANCE`]). A candidate
@@ -39,8 +41,10 @@
 use super::candidate::{Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS};
 use super::effect::EffectKind;
 use super::error::DiscrepancyError;
+use super::hand::GRIP_STIFFNESS_N_PER_M;
 use super::signals::BalanceSignals;
 use rigtwin_session::Session;
+use std::collections::BTreeMap;
 
 /// The force a lab's rig resolves over a session, N: the realistic force-sensor noise
 /// is 0.05–0.15 N RMS per sample and the tare error up to 0.3 N
@@ -241,6 +245,30 @@ pub fn at_edge(
     }
 }
 
+/// Why a grip whose stiffness the folds cannot tell from the stiffest searched is not
+/// told from a rigid grip (empty when its `range`, [`crate::Ranked::parameter_range`],
+/// stays below the grid's stiff end [`GRIP_STIFFNESS_N_PER_M`], or holds no stiffness).
+///
+/// The edge rule above reads the point estimate; a grip one step below the grid's end,
+/// whose range reaches it, is as unbounded: the data put no ceiling on its stiffness,
+/// and a grip stiffer than any searched is the rigid grip the baseline already is. What
+/// such a fit gains is the time constant's lag on the pulse's force, not a compliance.
+/// A grasp through skin and soft tissue is a few kN/m (the generator's 2–6 kN/m, the
+/// independent rig's 1.5 kN/m); its range ends well inside the grid.
+#[must_use]
+pub fn unbounded_grip(range: &BTreeMap<String, [f64; 2]>) -> Vec<String> {
+    let stiffest = GRIP_STIFFNESS_N_PER_M.1;
+    match range.get("stiffness_n_per_m") {
+        Some(&[lo, hi]) if hi >= stiffest * (1.0 - 1e-9) => vec![format!(
+            "not told from a rigid grip: the folds cannot tell its stiffness ({:.1}–{:.1} kN/m) from {:.0} kN/m, the stiffest searched",
+            lo / 1e3,
+            hi / 1e3,
+            stiffest / 1e3
+        )],
+        _ => Vec::new(),
+    }
+}
+
 /// Why a cart-balance fit with coefficients `beta` and the Gram's `bounds` leans on
 /// the motor gains' bound (empty when neither force gain sits at it, or the design
 /// bounds none: a rig without a force sensor).
@@ -372,5 +400,25 @@ mod tests {
         let why = at_gain_bound(&[9.0, 3.0, 1.5, 0.1, 0.1], &bounds);
         assert!(why[0].contains("(x at +10 %, y at +10 %)"), "{why:?}");
         assert!(at_gain_bound(&[9.0, 3.0, 1.5, 0.1, 0.1], &[]).is_empty());
+    }
+
+    /// A grip's range reaching the stiffness grid's last value (as `searched_range`
+    /// returns it there: the kept grid value itself, no midpoint beyond) is not told
+    /// from a rigid grip, whatever its point estimate; a range ending one grid step
+    /// below (5.9 %) is bounded, as is a soft grip's; a range of another parameter is
+    /// not read.
+    #[test]
+    fn a_grip_whose_range_reaches_the_stiffest_searched_is_not_told_from_rigid() {
+        let range = |k: &str, lo: f64, hi: f64| BTreeMap::from([(k.to_string(), [lo, hi])]);
+        let last = GRIP_STIFFNESS_N_PER_M.2 * crate::hand::GRIP_TIME_S.2 - 1;
+        let top = crate::hand::grip_setting(last).0;
+        let why = unbounded_grip(&range("stiffness_n_per_m", 44_600.0, top));
+        assert_eq!(why.len(), 1);
+        assert!(why[0].contains("44.6–50.0 kN/m"), "{why:?}");
+        let step = (GRIP_STIFFNESS_N_PER_M.1 / GRIP_STIFFNESS_N_PER_M.0)
+            .powf(1.0 / (GRIP_STIFFNESS_N_PER_M.2 - 1) as f64);
+        assert!(unbounded_grip(&range("stiffness_n_per_m", 40e3, top / step)).is_empty());
+        assert!(unbounded_grip(&range("stiffness_n_per_m", 1.3e3, 1.8e3)).is_empty());
+        assert!(unbounded_grip(&range("delay_ms", 20.0, GRIP_STIFFNESS_N_PER_M.1)).is_empty());
     }
 }

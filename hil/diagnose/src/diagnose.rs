@@ -71,7 +71,7 @@ use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
-    immaterial,
+    immaterial, unbounded_grip,
 };
 use super::delay::ActuationDelay;
 use super::effect::{Effect, EffectKind};
@@ -2027,6 +2027,7 @@ impl HandJudge<'_> {
         }
         let (at, of) = c.search_position(fit.setting);
         rejected.extend(at_edge(c.kind(), c.setting(fit.setting), at, of));
+        rejected.extend(unbounded_grip(&parameter_range));
         Ranked {
             name: c.name().to_string(),
             kind: c.kind(),
