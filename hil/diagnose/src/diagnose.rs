@@ -2077,18 +2077,22 @@ fn handle_beside_the_rates(
     fit: &HandJointFit,
     fb_delay_s: f64,
 ) -> Option<(BTreeMap<String, f64>, BTreeMap<String, f64>)> {
-    let at = joint
-        .member_parameters(0, &fit.fit.beta, fb_delay_s)
+    let mut all = joint.member_parameters(0, &fit.fit.beta, fb_delay_s);
+    let at = all
         .iter()
         .position(|(kind, _)| *kind == Some(EffectKind::HandleMass))?;
-    let params = |beta: &[f64]| {
-        joint
-            .member_parameters(0, beta, fb_delay_s)
-            .swap_remove(at)
-            .1
-    };
-    let per_fold: Vec<Vec<(String, f64)>> = fit.fit.folds.iter().map(|f| params(&f.beta)).collect();
-    Some(params_with_se(params(&fit.fit.beta), &per_fold))
+    let per_fold: Vec<Vec<(String, f64)>> = fit
+        .fit
+        .folds
+        .iter()
+        .map(|f| {
+            joint
+                .member_parameters(0, &f.beta, fb_delay_s)
+                .swap_remove(at)
+                .1
+        })
+        .collect();
+    Some(params_with_se(all.swap_remove(at).1, &per_fold))
 }
 
 /// What forward selection on the hand balance found.

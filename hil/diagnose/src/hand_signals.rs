@@ -41,6 +41,7 @@
 
 use nalgebra::{Matrix2, Vector2};
 use rigtwin_arm::dynamics::inverse_dynamics;
+use rigtwin_arm::error::ArmError;
 use rigtwin_arm::impedance::{endpoint_inertia, joint_to_endpoint};
 use rigtwin_arm::kinematics::{Elbow, inverse, jacobian, jacobian_dot};
 use rigtwin_arm::muscles::{MUSCLES, MuscleModel};
@@ -98,13 +99,20 @@ impl HandArm {
                     "subject.upper_arm_m / forearm_m / body_mass_kg: {e}"
                 ))
             })?;
-        let model =
-            MuscleModel::new(&params.muscles).map_err(|e| err(format!("arm muscles: {e}")))?;
+        HandArm::new(params, s.shoulder_m).map_err(|e| err(format!("arm muscles: {e}")))
+    }
+
+    /// The arm of `params` with its shoulder at `shoulder_m` (rig frame, m).
+    ///
+    /// # Errors
+    /// [`ArmError`] when the muscles' parameters are not physical.
+    pub fn new(params: ArmParams, shoulder_m: [f64; 2]) -> Result<HandArm, ArmError> {
+        let model = MuscleModel::new(&params.muscles)?;
         Ok(HandArm {
             ata: model.to_joint(&odd_part_weights(&model)),
             muscles: model,
             params,
-            shoulder_m: s.shoulder_m,
+            shoulder_m,
         })
     }
 
@@ -1018,17 +1026,16 @@ mod tests {
         assert!(odd_parts(&few, OddUnits::Replicates).is_none());
     }
 
-    #[test]
-    fn endpoint_inertia_is_symmetric_and_positive() {
-        let Ok(model) = MuscleModel::new(&ArmParams::default().muscles) else {
+    fn default_arm() -> HandArm {
+        let Ok(arm) = HandArm::new(ArmParams::default(), [0.0, -0.425]) else {
             panic!("the default muscles are valid");
         };
-        let arm = HandArm {
-            params: ArmParams::default(),
-            shoulder_m: [0.0, -0.425],
-            ata: model.to_joint(&odd_part_weights(&model)),
-            muscles: model,
-        };
+        arm
+    }
+
+    #[test]
+    fn endpoint_inertia_is_symmetric_and_positive() {
+        let arm = default_arm();
         let Some(ArmPosture { m_arm: m, s, .. }) = arm.at([0.0, 0.0]) else {
             panic!("the workspace centre is reachable");
         };
@@ -1039,18 +1046,6 @@ mod tests {
         assert!(s.determinant() > 0.0 && s[(0, 0)] > 0.0);
         // An arm of 3.45 kg cannot feel heavier than its mass at the hand in every direction.
         assert!(m.symmetric_eigenvalues().min() < 3.45);
-    }
-
-    fn default_arm() -> HandArm {
-        let Ok(model) = MuscleModel::new(&ArmParams::default().muscles) else {
-            panic!("the default muscles are valid");
-        };
-        HandArm {
-            params: ArmParams::default(),
-            shoulder_m: [0.0, -0.425],
-            ata: model.to_joint(&odd_part_weights(&model)),
-            muscles: model,
-        }
     }
 
     /// The torque a hand motion and force need, and the force that torque makes at that
