@@ -51,7 +51,7 @@ fn bench(c: &mut Criterion) {
     group.bench_function("sweep run_one", |b| {
         b.iter(|| {
             let dir = tempfile::tempdir().unwrap();
-            sweep::run::run_one(&s, &run, dir.path()).unwrap()
+            sweep::run::run_one(&s, &run, dir.path(), None).unwrap()
         });
     });
     group.finish();
@@ -61,7 +61,7 @@ fn bench(c: &mut Criterion) {
         group.bench_function(format!("{jobs} worker(s)"), |b| {
             b.iter(|| {
                 let dir = tempfile::tempdir().unwrap();
-                sweep::run_runs(&s, &[0, 1, 2, 3], dir.path(), jobs, &|_, _| {}).unwrap()
+                sweep::run_runs(&s, &[0, 1, 2, 3], dir.path(), None, jobs, &|_, _| {}).unwrap()
             });
         });
     }

@@ -52,7 +52,7 @@ fn a_slurm_job_array_and_its_dependent_merge_give_the_local_table() {
     std::fs::write(&sweep_file, sweep_text()).unwrap();
     let s = SweepFile::load(&sweep_file).unwrap();
     assert_eq!(s.runs(), 6);
-    let local = sweep::run_local(&s, &tmp.path().join("local"), 2, &|_, _| {}).unwrap();
+    let local = sweep::run_local(&s, &tmp.path().join("local"), 2, false, &|_, _| {}).unwrap();
 
     let cluster = tmp.path().join("cluster");
     let up = Command::new("bash")

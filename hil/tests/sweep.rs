@@ -7,7 +7,9 @@
 
 use std::path::{Path, PathBuf};
 
+use rigtwin::session::Session;
 use rigtwin::sweep::{self, ShardDone, ShardError, SweepError, SweepFile, table};
+use rigtwin_diagnose::{DiagnoseOptions, diagnose};
 
 /// Four short runs: two pulse amplitudes × two subjects (`tests/slurm/small-sweep.toml`).
 const SMALL: &str = include_str!("slurm/small-sweep.toml");
@@ -27,7 +29,7 @@ fn read(p: &Path) -> Vec<u8> {
 
 /// Shard `k` of `n` of `sweep` into `out`.
 fn shard(s: &SweepFile, out: &Path, k: usize, n: usize) -> PathBuf {
-    match sweep::run_shard(s, out, k, n, 2, &nothing).unwrap() {
+    match sweep::run_shard(s, out, k, n, 2, false, &nothing).unwrap() {
         ShardDone::Written(p, _) | ShardDone::AlreadyThere(p) => p,
     }
 }
@@ -41,7 +43,7 @@ fn any_split_in_any_order_merges_to_the_local_bytes() {
     let s = load(SMALL, tmp.path());
     assert_eq!(s.runs(), 4);
     let local = tmp.path().join("local");
-    let w = sweep::run_local(&s, &local, 2, &nothing).unwrap();
+    let w = sweep::run_local(&s, &local, 2, false, &nothing).unwrap();
     assert_eq!(w.runs, 4);
     let table = read(&w.table);
     let text = String::from_utf8(table.clone()).unwrap();
@@ -68,7 +70,7 @@ fn any_split_in_any_order_merges_to_the_local_bytes() {
     }
     // A requeued task whose shard is complete does not run again.
     let out = tmp.path().join("split-3");
-    let again = sweep::run_shard(&s, &out, 1, 3, 1, &nothing).unwrap();
+    let again = sweep::run_shard(&s, &out, 1, 3, 1, false, &nothing).unwrap();
     assert!(matches!(again, ShardDone::AlreadyThere(_)), "{again:?}");
 }
 
@@ -132,13 +134,14 @@ fn the_merge_refuses_what_is_not_one_whole_sweep() {
         &one_subject.replace("seed = 5", "seed = 6"),
         &tmp.path().join("x"),
     );
-    let e = sweep::run_shard(&another, &out, 0, 2, 1, &nothing).unwrap_err();
+    let e = sweep::run_shard(&another, &out, 0, 2, 1, false, &nothing).unwrap_err();
     assert!(matches!(e, SweepError::Another(_)), "{e}");
 }
 
 /// A rail friction hidden at 3 N Coulomb is named in every run and sized within 20 %;
 /// at 0 N (the same subjects and sessions otherwise) nothing is named: the detection
-/// column measures what it says. 20 %: the README's requirement for a named effect's
+/// column measures what it says. The sweep keeps its sessions, and each kept one,
+/// diagnosed again, gives its row. 20 %: the README's requirement for a named effect's
 /// parameters.
 #[test]
 fn a_hidden_friction_is_detected_at_its_size_and_not_without_it() {
@@ -155,13 +158,42 @@ fixed = { "plant.effects.rail_friction.viscous_n_s_per_m" = 0.0, "plant.effects.
     let s = load(&text, tmp.path());
     assert!(s.diagnose);
     let out = tmp.path().join("out");
-    let w = sweep::run_local(&s, &out, 2, &nothing).unwrap();
+    let w = sweep::run_local(&s, &out, 2, true, &nothing).unwrap();
     let csv = std::fs::read_to_string(&w.table).unwrap();
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let kept = sweep::sessions_dir(&out);
+    assert_eq!(std::fs::read_dir(&kept).unwrap().count(), s.runs());
     for line in lines {
         let cells: Vec<&str> = line.split(',').collect();
+        // The kept session is the one the row measured: diagnosed again, it names the
+        // row's causes (the diagnosis is deterministic), on the row's trial count.
+        let run: usize = cells[col("run")].parse().unwrap();
+        let dir = kept.join(sweep::run::run_folder(run)).join("S01");
+        let session = Session::read(&dir).unwrap();
+        assert_eq!(
+            session.trials.len().to_string(),
+            cells[col("trials")],
+            "{line}"
+        );
+        let options = DiagnoseOptions {
+            folds: s.folds,
+            ..DiagnoseOptions::default()
+        };
+        let again = diagnose(&session, &options).unwrap();
+        let names: Vec<&str> = again
+            .diagnosis
+            .causes
+            .iter()
+            .map(|c| c.name.name())
+            .collect();
+        let names = if names.is_empty() {
+            "none".to_owned()
+        } else {
+            names.join("+")
+        };
+        assert_eq!(names, cells[col("causes")], "{line}");
         let size: f64 = cells[col("plant.effects.rail_friction.coulomb_n")]
             .parse()
             .unwrap();

@@ -27,6 +27,8 @@ Examples:
   rigtwin sweep hil/sweeps/pulses.toml --dry-run            # check it and say what it costs
   rigtwin sweep hil/sweeps/pulses.toml --shard 3/16         # one task of a job array
   rigtwin sweep merge runs/pulses                           # the shards -> sweep.csv, sweep.md
+  rigtwin sweep hil/sweeps/grip-compliance.toml --out g --keep-sessions
+  rigtwin diagnose g/sessions/run-0000003/S01               # read run 3's diagnosis again
   rigtwin sweep hil/sweeps/pulses.toml --emit slurm --tasks 16 --max-running 8 --out /scratch/pulses
       (measures one run, writes <out>/slurm/{array,merge}.sbatch and submit.sh; then
        bash /scratch/pulses/slurm/submit.sh)
@@ -90,6 +92,11 @@ pub struct Args {
     /// measuring one run (s/s).
     #[arg(long, value_name = "S_PER_S")]
     pub wall_per_simulated_s: Option<f64>,
+
+    /// Keep every run's session in <out>/sessions/run-NNNNNNN/S01 (about 2 MB for 32
+    /// trials), to diagnose or view a run again; the table is the same without it.
+    #[arg(long, conflicts_with = "emit")]
+    pub keep_sessions: bool,
 
     /// Check the sweep, say what it would cost, and stop.
     #[arg(long)]
@@ -216,15 +223,23 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         );
         // A task's log (no terminal) gets a line per run instead of the bar.
         let log = !std::io::IsTerminal::is_terminal(&std::io::stderr());
-        let done = sweep::run_shard(&s, &out, k, n, args.jobs, &|d, total| {
-            bar.set_position(d as u64);
-            if log {
-                let _ = writeln!(
-                    std::io::stderr().lock(),
-                    "shard {k}/{n}: {d}/{total} runs done"
-                );
-            }
-        })?;
+        let done = sweep::run_shard(
+            &s,
+            &out,
+            k,
+            n,
+            args.jobs,
+            args.keep_sessions,
+            &|d, total| {
+                bar.set_position(d as u64);
+                if log {
+                    let _ = writeln!(
+                        std::io::stderr().lock(),
+                        "shard {k}/{n}: {d}/{total} runs done"
+                    );
+                }
+            },
+        )?;
         bar.finish_and_clear();
         match done {
             ShardDone::Written(p, runs) => {
@@ -248,7 +263,9 @@ pub fn run(args: &Args) -> anyhow::Result<()> {
         "{elapsed_precise} [{bar:40}] {pos}/{len} runs, {eta} left",
     );
     let started = Instant::now();
-    let w = sweep::run_local(&s, &out, args.jobs, &|d, _| bar.set_position(d as u64))?;
+    let w = sweep::run_local(&s, &out, args.jobs, args.keep_sessions, &|d, _| {
+        bar.set_position(d as u64);
+    })?;
     bar.finish_and_clear();
     outln!(
         "{} runs in {} on {} worker(s): {}; report {}",
@@ -299,7 +316,7 @@ fn emit_slurm(args: &Args, s: &SweepFile, path: &Path, out: &Path) -> anyhow::Re
             let run = Run::at(s, 0);
             errln!("measuring run 0 for the requests ...");
             let started = Instant::now();
-            sweep::run::run_one(s, &run, &out.join(".work").join("measure"))?;
+            sweep::run::run_one(s, &run, &out.join(".work").join("measure"), None)?;
             let _ = std::fs::remove_dir_all(out.join(".work"));
             let wall = started.elapsed().as_secs_f64();
             let sim = slurm::simulated_s(s, &run);

@@ -24,6 +24,7 @@
 //! <out>/sweep.csv                   every run, in run order
 //! <out>/sweep.md, *.png             the report
 //! <out>/.work/run-NNNNNNN/          a run's session while it is measured (removed after)
+//! <out>/sessions/run-NNNNNNN/S01/   with `keep_sessions`: every run's session, kept
 //! ```
 
 pub mod file;
@@ -133,7 +134,8 @@ pub fn prepare(sweep: &SweepFile, out: &Path) -> Result<(), SweepError> {
 }
 
 /// Runs `indices` of `sweep` on `jobs` threads (rows in the order of `indices`);
-/// `progress(done, total)` after each run.
+/// `progress(done, total)` after each run. With `keep`, every run's session is moved
+/// there ([`run::run_one`]).
 ///
 /// # Errors
 /// The first run that could not be written.
@@ -141,6 +143,7 @@ pub fn run_runs(
     sweep: &SweepFile,
     indices: &[usize],
     work: &Path,
+    keep: Option<&Path>,
     jobs: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<Row>, SweepError> {
@@ -156,7 +159,7 @@ pub fn run_runs(
         indices
             .par_iter()
             .map(|&i| {
-                let row = run::run_one(sweep, &Run::at(sweep, i), work);
+                let row = run::run_one(sweep, &Run::at(sweep, i), work, keep);
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 row
             })
@@ -179,7 +182,8 @@ pub struct Written {
 }
 
 /// Runs every run of `sweep` on this machine and writes the table and the report into
-/// `out` (which must not hold a finished sweep).
+/// `out` (which must not hold a finished sweep); with `keep_sessions`, every run's
+/// session too ([`sessions_dir`]). The table is the same with or without.
 ///
 /// # Errors
 /// [`SweepError`].
@@ -187,6 +191,7 @@ pub fn run_local(
     sweep: &SweepFile,
     out: &Path,
     jobs: usize,
+    keep_sessions: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Written, SweepError> {
     if out.join("sweep.csv").exists() {
@@ -194,7 +199,15 @@ pub fn run_local(
     }
     prepare(sweep, out)?;
     let all: Vec<usize> = (0..sweep.runs()).collect();
-    let rows = run_runs(sweep, &all, &out.join(".work"), jobs, progress)?;
+    let keep = keep_sessions.then(|| sessions_dir(out));
+    let rows = run_runs(
+        sweep,
+        &all,
+        &out.join(".work"),
+        keep.as_deref(),
+        jobs,
+        progress,
+    )?;
     finish(sweep, out, &table::records(sweep, &rows))
 }
 
@@ -208,7 +221,7 @@ pub enum ShardDone {
 }
 
 /// Runs shard `k` of `n` (runs `k, k+n, …`) and writes its file atomically into
-/// `<out>/shards`.
+/// `<out>/shards`; with `keep_sessions`, its runs' sessions into [`sessions_dir`].
 ///
 /// # Errors
 /// [`SweepError`].
@@ -218,6 +231,7 @@ pub fn run_shard(
     k: usize,
     n: usize,
     jobs: usize,
+    keep_sessions: bool,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ShardDone, SweepError> {
     prepare(sweep, out)?;
@@ -231,6 +245,7 @@ pub fn run_shard(
         sweep,
         &runs,
         &out.join(".work").join(format!("shard-{k}")),
+        keep_sessions.then(|| sessions_dir(out)).as_deref(),
         jobs,
         progress,
     )?;
@@ -239,6 +254,13 @@ pub fn run_shard(
     let text = format!("{}\n{text}", table::shard_header(&id, k, n, sweep.runs()));
     table::write_atomic(&path, &text)?;
     Ok(ShardDone::Written(path, runs.len()))
+}
+
+/// Where a sweep keeps its runs' sessions: `<out>/sessions`, one `run-NNNNNNN/` per run
+/// ([`run::run_folder`]), each with the session in `S01/`.
+#[must_use]
+pub fn sessions_dir(out: &Path) -> PathBuf {
+    out.join("sessions")
 }
 
 /// Merges the shards of the sweep in `out` and writes its table and report.

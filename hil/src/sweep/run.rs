@@ -152,6 +152,12 @@ pub enum RunError {
     },
 }
 
+/// The folder of run `index` (in the scratch folder, and where a kept session goes).
+#[must_use]
+pub fn run_folder(index: usize) -> String {
+    format!("run-{index:07}")
+}
+
 /// The protocol of `run`: its grid point and size, with the drawn subject as the one
 /// subject of the session.
 #[must_use]
@@ -168,15 +174,22 @@ pub fn protocol_of(sweep: &SweepFile, run: &Run) -> crate::protocol::Protocol {
     p
 }
 
-/// Runs `run` of `sweep` in a scratch folder under `work` (removed afterwards).
+/// Runs `run` of `sweep` in a scratch folder under `work`, removed afterwards or, with
+/// `keep`, moved to `keep/run-NNNNNNN/` once measured (the rehearsal's folder: the
+/// session in `S01/` and its report), so that a run's diagnosis can be read again.
 ///
 /// # Errors
-/// [`RunError`] when the scratch folder or the session cannot be written. A simulation
-/// that refuses its protocol or diverges is the run's result (its row's `error`), not an
-/// error of the sweep.
-pub fn run_one(sweep: &SweepFile, run: &Run, work: &Path) -> Result<Row, RunError> {
+/// [`RunError`] when the scratch folder or the session cannot be written or kept. A
+/// simulation that refuses its protocol or diverges is the run's result (its row's
+/// `error`, nothing kept), not an error of the sweep.
+pub fn run_one(
+    sweep: &SweepFile,
+    run: &Run,
+    work: &Path,
+    keep: Option<&Path>,
+) -> Result<Row, RunError> {
     let protocol = protocol_of(sweep, run);
-    let dir = work.join(format!("run-{:07}", run.index));
+    let dir = work.join(run_folder(run.index));
     let io = |path: &Path, source| RunError::Io {
         run: run.index,
         path: path.to_path_buf(),
@@ -253,7 +266,18 @@ pub fn run_one(sweep: &SweepFile, run: &Run, work: &Path) -> Result<Row, RunErro
     {
         row.diagnosis = Some(diagnose_session(sweep, &s.dir));
     }
-    std::fs::remove_dir_all(&dir).map_err(|e| io(&dir, e))?;
+    match keep {
+        Some(keep) => {
+            let to = keep.join(run_folder(run.index));
+            if to.exists() {
+                // Kept by an earlier attempt at this run (a requeued task).
+                std::fs::remove_dir_all(&to).map_err(|e| io(&to, e))?;
+            }
+            std::fs::create_dir_all(keep).map_err(|e| io(keep, e))?;
+            std::fs::rename(&dir, &to).map_err(|e| io(&to, e))?;
+        }
+        None => std::fs::remove_dir_all(&dir).map_err(|e| io(&dir, e))?,
+    }
     Ok(row)
 }
 
