@@ -8,6 +8,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/i --ideal
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/h --arm-inertia-scale 1.15
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/f --movement 1.0
+//! cargo run --release -p rigtwin-tests --example generate -- grip-compliance 3 /tmp/g --grip 1000,10
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -21,20 +22,25 @@
 //! (on by default: a lab's rig); `--arm-inertia-scale F` multiplies the simulated arm's
 //! segment masses and moments of inertia by `F` (a subject heavier or lighter than the
 //! tables the diagnosis assumes; default 1); `--movement SECONDS` sets the reach's
-//! duration (default the protocol's 3 s). Prints the session folder and what it hides.
+//! duration (default the protocol's 3 s); `--grip N_PER_M,N_S_PER_M` hides a grip of that
+//! stiffness and damping instead of the drawn one (effect `grip-compliance` only). Prints
+//! the session folder and what it hides.
 
-use rigtwin_tests::generator::{Design, EFFECTS, generate_design, parse_pulse};
+use rigtwin_tests::generator::{
+    Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_pulse,
+};
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
     let mut motor_noise = true;
     let mut repetitions = None;
     let mut pulse = None;
+    let mut grip = None;
     let mut ideal = false;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
@@ -79,6 +85,29 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                 }
                 movement_s = Some(s);
             }
+            "--grip" => {
+                let v = args
+                    .next()
+                    .ok_or_else(|| format!("--grip needs N_PER_M,N_S_PER_M; {}", usage()))?;
+                let (k, b) = v
+                    .split_once(',')
+                    .ok_or_else(|| format!("--grip {v:?}: want N_PER_M,N_S_PER_M, e.g. 1000,10"))?;
+                let k: f64 = k
+                    .trim()
+                    .parse()
+                    .map_err(|e| format!("--grip stiffness {k:?}: {e}"))?;
+                let b: f64 = b
+                    .trim()
+                    .parse()
+                    .map_err(|e| format!("--grip damping {b:?}: {e}"))?;
+                if !(k.is_finite() && k > 0.0 && b.is_finite() && b >= 0.0) {
+                    return Err(format!(
+                        "--grip wants a stiffness > 0 N/m and a damping >= 0 N s/m, got {k}, {b}"
+                    )
+                    .into());
+                }
+                grip = Some((k, b));
+            }
             "--pulse" => {
                 let v = args
                     .next()
@@ -109,7 +138,18 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     }
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
-    let g = generate_design(effect, seed, &design, std::path::Path::new(out.as_str()))?;
+    let out = std::path::Path::new(out.as_str());
+    let g = match grip {
+        Some((k, b)) if effect == "grip-compliance" => {
+            generate_hidden(Hidden::grip(k, b), seed, &design, out)?
+        }
+        Some(_) => {
+            return Err(
+                format!("--grip goes with the effect grip-compliance, not {effect:?}").into(),
+            );
+        }
+        None => generate_design(effect, seed, &design, out)?,
+    };
     println!("{}", g.dir.display());
     println!("hidden {} {:?}", g.hidden.effect, g.hidden.parameters);
     Ok(())
