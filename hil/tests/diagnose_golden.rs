@@ -29,7 +29,7 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-rotation-mass",
-        "c6fe08ac9f05dfbef8c1a2b83e979a882ea075a236bc133bdae28bba0bf6f8d1",
+        "aa63d256f1e08721bebb13146e5b35dff134ee6d3d783a2acdff2e49b3b5a77c",
     ),
 ];
 

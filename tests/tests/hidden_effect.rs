@@ -385,6 +385,42 @@ fn a_soft_heavily_damped_grip_is_sized() {
     assert!(d.unexplained.is_none() && d.hand_unexplained.is_none());
 }
 
+/// A soft grip with light damping, 1000 N/m with 10 N s/m (τ 10 ms): the hand, behind
+/// its spring, rings near 4 Hz under the pulse and the handle no longer feels the arm's
+/// inertia. The rival (an arm within ±20 % of the tables, its impedance following the
+/// reach's activations) held at its lighter bound then explained the responses about as
+/// well as the grip, and the grip was rejected as "not told from the subject's arm" on
+/// this seed (2 of 6 seeds, 4 of 8 subjects of a sweep). Set free, the rival's inertia
+/// comes out near 0 of the tables', an arm no table allows, so the rival does not stand.
+/// Asserted: the grip alone is named, its stiffness within 20 %, a held-out gain of 50 %,
+/// nothing unexplained.
+#[test]
+fn a_soft_lightly_damped_grip_is_not_taken_for_the_arm() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (k, b) = (1000.0, 10.0);
+    let g = generate_hidden(
+        Hidden::grip(k, b),
+        1,
+        &Design::SHARED,
+        &tmp.path().join("out"),
+    )
+    .unwrap();
+    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
+    assert_eq!(names, ["grip-compliance"], "{:?}", d.ranking);
+    let c = &d.causes[0];
+    let found_k = c.parameters["stiffness_n_per_m"];
+    println!("{found_k:.0} N/m, gain {:.3}", c.gain);
+    assert!(
+        (found_k / k - 1.0).abs() < 0.2,
+        "stiffness {found_k:.0} for {k}"
+    );
+    assert!(c.gain >= 0.5, "gain {}", c.gain);
+    assert!(d.unexplained.is_none() && d.hand_unexplained.is_none());
+}
+
 #[test]
 fn hidden_handle_mass_is_found() {
     check("handle-mass", 1003);

@@ -1950,6 +1950,13 @@ impl HandJudge<'_> {
             (Some(t), Some(rep)) => (t, &rep.subject_arm),
             _ => (&with_rates.fit, rival),
         };
+        let free = h
+            .replicates
+            .as_ref()
+            .map_or(&h.subject_arm_free, |rep| &rep.subject_arm_free);
+        if off_the_tables(free, self.t_crit) {
+            return Ok(row);
+        }
         let (_, _, _, t) = fold_stats(test_fit, test_rival, test_rival.nrmse());
         if t.is_nan() || t <= self.t_crit {
             let scale = 1.0 + rival.beta.last().copied().unwrap_or(f64::NAN);
@@ -2045,6 +2052,27 @@ impl HandJudge<'_> {
             given: given.to_vec(),
         }
     }
+}
+
+/// Whether the arm's inertia scale the responses ask for with the scale free
+/// ([`SubjectArm::OFF_THE_TABLES`], its fit `free`) lies beyond ±[`ARM_INERTIA_TOLERANCE`]
+/// of the tables by more than `t_crit` of its jackknife standard errors over the folds.
+///
+/// Then the rival, held at its bound, is not the subject's arm, and a heavier handle or
+/// a grip is not held to it. A grip's spring that hides the arm's inertia from the
+/// handle makes the free scale about 0: 1 kN/m grips with 10 N s/m of damping asked for
+/// −0.17 to +0.06 where sessions hiding nothing ask for 0.99–1.01
+/// (`hil/docs/notes/2026-12-06-rival-off-the-tables.md`). The test is on the parameter,
+/// not on the held-out error: held at its bound the rival's eight rates take up most of
+/// what the inertia leaves, so the two errors differ little while the scales differ by
+/// their whole range.
+fn off_the_tables(free: &CvFit, t_crit: f64) -> bool {
+    let scale = |beta: &[f64]| 1.0 + beta.last().copied().unwrap_or(f64::NAN);
+    let s = scale(&free.beta);
+    let per_fold: Vec<f64> = free.folds.iter().map(|f| scale(&f.beta)).collect();
+    let se = jackknife_se(&per_fold);
+    let beyond = (s - (1.0 + ARM_INERTIA_TOLERANCE)).max((1.0 - ARM_INERTIA_TOLERANCE) - s);
+    beyond.is_finite() && se.is_finite() && beyond > t_crit * se
 }
 
 /// `members` (at their settings, with the grip's load) fitted with the rival's rates

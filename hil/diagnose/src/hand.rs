@@ -902,6 +902,8 @@ pub struct SubjectArm {
     pub rates: bool,
     /// Whether the inertia's scale is fitted.
     pub inertia: bool,
+    /// Whether the inertia's scale is held within ±[`ARM_INERTIA_TOLERANCE`].
+    pub bounded: bool,
 }
 
 impl SubjectArm {
@@ -909,17 +911,28 @@ impl SubjectArm {
     pub const WHOLE: SubjectArm = SubjectArm {
         rates: true,
         inertia: true,
+        bounded: true,
+    };
+    /// The rival with its inertia's scale free: what the responses make of the arm when
+    /// the tables do not hold it. A rival held at its bound and beaten by this one asks
+    /// for an arm the tables rule out, and is not the subject's arm.
+    pub const OFF_THE_TABLES: SubjectArm = SubjectArm {
+        rates: true,
+        inertia: true,
+        bounded: false,
     };
     /// The inertia alone.
     pub const INERTIA: SubjectArm = SubjectArm {
         rates: false,
         inertia: true,
+        bounded: true,
     };
     /// The impedance's rates alone: what a heavier handle or a grip carries when judged
     /// against the rival, so that the two compare on the same footing.
     pub const RATES: SubjectArm = SubjectArm {
         rates: true,
         inertia: false,
+        bounded: true,
     };
 
     fn rate_columns(self) -> usize {
@@ -937,6 +950,7 @@ impl HandCandidate for SubjectArm {
     }
     fn name(&self) -> &'static str {
         match (self.rates, self.inertia) {
+            (true, true) if !self.bounded => "subject-arm-off-the-tables",
             (true, true) => "subject-arm",
             (false, _) => "arm-inertia",
             (true, false) => "impedance-rates",
@@ -1000,7 +1014,7 @@ impl HandCandidate for SubjectArm {
         p
     }
     fn bounds(&self) -> Vec<(usize, f64, f64)> {
-        if !self.inertia {
+        if !self.inertia || !self.bounded {
             return Vec::new();
         }
         vec![(
@@ -1153,6 +1167,8 @@ pub struct ReplicateTest {
     pub fits: Vec<CvFit>,
     /// The rival's fit ([`SubjectArm`]).
     pub subject_arm: CvFit,
+    /// The rival's fit with its inertia free ([`SubjectArm::OFF_THE_TABLES`]).
+    pub subject_arm_free: CvFit,
     /// The repetitions themselves (for the joint fits of forward selection).
     pub units: Vec<HandResponse>,
 }
@@ -1188,6 +1204,8 @@ pub struct HandJudgement {
     pub fits: Vec<HandFit>,
     /// The rival's fit ([`SubjectArm`]).
     pub subject_arm: CvFit,
+    /// The rival's fit with its inertia free ([`SubjectArm::OFF_THE_TABLES`]).
+    pub subject_arm_free: CvFit,
     /// The arm's geometry the balance used.
     pub arm: HandArm,
 }
@@ -1331,6 +1349,11 @@ pub fn judge_hand(
         &folds,
         "subject arm",
     )?;
+    let subject_arm_free = cross_validate(
+        &grams(&SubjectArm::OFF_THE_TABLES, fb_delay_s),
+        &folds,
+        "subject arm off the tables",
+    )?;
     let replicates = match replicates {
         Some(units) => {
             // Leave one repetition out: the most degrees of freedom for the t-test.
@@ -1344,11 +1367,17 @@ pub fn judge_hand(
                 .map(|f| cv(f.candidate.as_ref(), f.candidate.name()))
                 .collect::<Result<Vec<_>, DiscrepancyError>>()?;
             let subject_arm = cv(&SubjectArm::WHOLE, "subject arm (replicates)")?;
+            let subject_arm_free = cv(
+                &SubjectArm::OFF_THE_TABLES,
+                "subject arm off the tables (replicates)",
+            )?;
+
             Some(ReplicateTest {
                 folds,
                 baseline,
                 fits,
                 subject_arm,
+                subject_arm_free,
                 units,
             })
         }
@@ -1363,6 +1392,7 @@ pub fn judge_hand(
         baseline,
         fits,
         subject_arm,
+        subject_arm_free,
         arm,
     }))
 }
