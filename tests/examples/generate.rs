@@ -27,7 +27,7 @@
 //! the session folder and what it hides.
 
 use rigtwin_tests::generator::{
-    Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_pulse,
+    Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_grip, parse_pulse,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
@@ -89,24 +89,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                 let v = args
                     .next()
                     .ok_or_else(|| format!("--grip needs N_PER_M,N_S_PER_M; {}", usage()))?;
-                let (k, b) = v
-                    .split_once(',')
-                    .ok_or_else(|| format!("--grip {v:?}: want N_PER_M,N_S_PER_M, e.g. 1000,10"))?;
-                let k: f64 = k
-                    .trim()
-                    .parse()
-                    .map_err(|e| format!("--grip stiffness {k:?}: {e}"))?;
-                let b: f64 = b
-                    .trim()
-                    .parse()
-                    .map_err(|e| format!("--grip damping {b:?}: {e}"))?;
-                if !(k.is_finite() && k > 0.0 && b.is_finite() && b >= 0.0) {
-                    return Err(format!(
-                        "--grip wants a stiffness > 0 N/m and a damping >= 0 N s/m, got {k}, {b}"
-                    )
-                    .into());
-                }
-                grip = Some((k, b));
+                grip = Some(parse_grip(&v).map_err(|e| format!("--{e}"))?);
             }
             "--pulse" => {
                 let v = args

@@ -401,24 +401,33 @@ impl Design {
     }
 }
 
+/// Two numbers from `A,B`, each named (`what` and `names`) in its error, `form` saying
+/// what is wanted.
+fn two_numbers(v: &str, what: &str, names: [&str; 2], form: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = v.split(',').collect();
+    let [a, b] = parts.as_slice() else {
+        return Err(format!("{what} {v:?}: want {form}"));
+    };
+    let number = |x: &str, name: &str| {
+        x.trim()
+            .parse::<f64>()
+            .map_err(|e| format!("{what} {name} {x:?}: {e}"))
+    };
+    Ok((number(a, names[0])?, number(b, names[1])?))
+}
+
 /// A force pulse from `SECONDS,NEWTONS` (e.g. `0.05,30`), as the example's `--pulse`
 /// and the sweep's `SWEEP_PULSE` take it.
 ///
 /// # Errors
 /// Not two numbers, a duration not above 0 s or an amplitude below 0 N, said with `v`.
 pub fn parse_pulse(v: &str) -> Result<ForcePulseConfig, String> {
-    let parts: Vec<&str> = v.split(',').collect();
-    let [d, a] = parts.as_slice() else {
-        return Err(format!("pulse {v:?}: want SECONDS,NEWTONS, e.g. 0.05,30"));
-    };
-    let duration_s: f64 = d
-        .trim()
-        .parse()
-        .map_err(|e| format!("pulse duration {d:?}: {e}"))?;
-    let amplitude_n: f64 = a
-        .trim()
-        .parse()
-        .map_err(|e| format!("pulse amplitude {a:?}: {e}"))?;
+    let (duration_s, amplitude_n) = two_numbers(
+        v,
+        "pulse",
+        ["duration", "amplitude"],
+        "SECONDS,NEWTONS, e.g. 0.05,30",
+    )?;
     if !(duration_s > 0.0 && amplitude_n >= 0.0) {
         return Err(format!(
             "pulse {v:?}: the duration must be > 0 s and the amplitude >= 0 N"
@@ -428,6 +437,26 @@ pub fn parse_pulse(v: &str) -> Result<ForcePulseConfig, String> {
         duration_s,
         amplitude_n,
     })
+}
+
+/// A grip's stiffness and damping from `N_PER_M,N_S_PER_M` (e.g. `1000,10`), as the
+/// example's `--grip` takes it.
+///
+/// # Errors
+/// Not two numbers, a stiffness not above 0 N/m or a damping below 0 N s/m, said with `v`.
+pub fn parse_grip(v: &str) -> Result<(f64, f64), String> {
+    let (k, b) = two_numbers(
+        v,
+        "grip",
+        ["stiffness", "damping"],
+        "N_PER_M,N_S_PER_M, e.g. 1000,10",
+    )?;
+    if !(k > 0.0 && k.is_finite() && b >= 0.0 && b.is_finite()) {
+        return Err(format!(
+            "grip {v:?}: the stiffness must be > 0 N/m and the damping >= 0 N s/m"
+        ));
+    }
+    Ok((k, b))
 }
 
 /// Writes a session of `trials` reaches hiding `effect` (parameters and subject drawn
@@ -556,6 +585,19 @@ mod tests {
                 panic!("{bad:?} was accepted");
             };
             assert!(e.contains("pulse"), "{e}");
+        }
+    }
+
+    /// A grip reads back exactly; a zero or infinite stiffness, a negative damping, a
+    /// word or a third number are refused with the value in the message.
+    #[test]
+    fn grip_reads_stiffness_and_damping() {
+        assert_eq!(parse_grip("1000, 10"), Ok((1000.0, 10.0)));
+        for bad in ["1000", "0,10", "inf,10", "1000,-1", "soft,10", "1000,10,1"] {
+            let Err(e) = parse_grip(bad) else {
+                panic!("{bad:?} was accepted");
+            };
+            assert!(e.contains("grip"), "{e}");
         }
     }
 }

@@ -353,11 +353,22 @@ fn a_grips_searched_range_holds_the_stiffness_it_reports() {
 /// gain of 50 %, nothing unexplained.
 #[test]
 fn a_soft_heavily_damped_grip_is_sized() {
-    let tmp = tempfile::tempdir().unwrap();
     let (k, b) = (1500.0, 25.0);
+    let (_, found_b) = a_grip_alone_is_sized(k, b, 1);
+    assert!(
+        (found_b / b - 1.0).abs() < 0.3,
+        "damping {found_b:.1} for {b}"
+    );
+}
+
+/// Diagnoses a shared-layout session (seed `seed`) hiding a grip of `k` N/m and `b`
+/// N s/m alone and asserts: the grip alone is named, its stiffness within 20 %, a
+/// held-out gain of 50 %, nothing unexplained. Returns its stiffness and damping.
+fn a_grip_alone_is_sized(k: f64, b: f64, seed: u64) -> (f64, f64) {
+    let tmp = tempfile::tempdir().unwrap();
     let g = generate_hidden(
         Hidden::grip(k, b),
-        1,
+        seed,
         &Design::SHARED,
         &tmp.path().join("out"),
     )
@@ -366,7 +377,7 @@ fn a_soft_heavily_damped_grip_is_sized() {
         .unwrap()
         .diagnosis;
     let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
-    assert_eq!(names, ["grip-compliance"], "{:?}", d.causes);
+    assert_eq!(names, ["grip-compliance"], "{:?}", d.ranking);
     let c = &d.causes[0];
     let (found_k, found_b) = (
         c.parameters["stiffness_n_per_m"],
@@ -377,12 +388,9 @@ fn a_soft_heavily_damped_grip_is_sized() {
         (found_k / k - 1.0).abs() < 0.2,
         "stiffness {found_k:.0} for {k}"
     );
-    assert!(
-        (found_b / b - 1.0).abs() < 0.3,
-        "damping {found_b:.1} for {b}"
-    );
     assert!(c.gain >= 0.5, "gain {}", c.gain);
     assert!(d.unexplained.is_none() && d.hand_unexplained.is_none());
+    (found_k, found_b)
 }
 
 /// A soft grip with light damping, 1000 N/m with 10 N s/m (τ 10 ms): the hand, behind
@@ -396,29 +404,7 @@ fn a_soft_heavily_damped_grip_is_sized() {
 /// nothing unexplained.
 #[test]
 fn a_soft_lightly_damped_grip_is_not_taken_for_the_arm() {
-    let tmp = tempfile::tempdir().unwrap();
-    let (k, b) = (1000.0, 10.0);
-    let g = generate_hidden(
-        Hidden::grip(k, b),
-        1,
-        &Design::SHARED,
-        &tmp.path().join("out"),
-    )
-    .unwrap();
-    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
-    assert_eq!(names, ["grip-compliance"], "{:?}", d.ranking);
-    let c = &d.causes[0];
-    let found_k = c.parameters["stiffness_n_per_m"];
-    println!("{found_k:.0} N/m, gain {:.3}", c.gain);
-    assert!(
-        (found_k / k - 1.0).abs() < 0.2,
-        "stiffness {found_k:.0} for {k}"
-    );
-    assert!(c.gain >= 0.5, "gain {}", c.gain);
-    assert!(d.unexplained.is_none() && d.hand_unexplained.is_none());
+    a_grip_alone_is_sized(1000.0, 10.0, 1);
 }
 
 #[test]
