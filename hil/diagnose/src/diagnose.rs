@@ -1950,16 +1950,12 @@ impl HandJudge<'_> {
             (Some(t), Some(rep)) => (t, &rep.subject_arm),
             _ => (&with_rates.fit, rival),
         };
-        let free = h
-            .replicates
-            .as_ref()
-            .map_or(&h.subject_arm_free, |rep| &rep.subject_arm_free);
-        if off_the_tables(free, self.t_crit) {
+        if off_the_tables(&h.subject_arm_free, self.t_crit) {
             return Ok(row);
         }
         let (_, _, _, t) = fold_stats(test_fit, test_rival, test_rival.nrmse());
         if t.is_nan() || t <= self.t_crit {
-            let scale = 1.0 + rival.beta.last().copied().unwrap_or(f64::NAN);
+            let scale = SubjectArm::WHOLE.inertia_scale(&rival.beta);
             row.rejected.push(format!(
                 "not told from the subject's arm: its inertia ×{scale:.2} of the tables' (within ±{:.0} %) and an impedance following the reach's activations explain the responses as well (t {t:.1} against it, the candidate given the same impedance change)",
                 ARM_INERTIA_TOLERANCE * 100.0
@@ -2067,7 +2063,7 @@ impl HandJudge<'_> {
 /// what the inertia leaves, so the two errors differ little while the scales differ by
 /// their whole range.
 fn off_the_tables(free: &CvFit, t_crit: f64) -> bool {
-    let scale = |beta: &[f64]| 1.0 + beta.last().copied().unwrap_or(f64::NAN);
+    let scale = |beta: &[f64]| SubjectArm::OFF_THE_TABLES.inertia_scale(beta);
     let s = scale(&free.beta);
     let per_fold: Vec<f64> = free.folds.iter().map(|f| scale(&f.beta)).collect();
     let se = jackknife_se(&per_fold);

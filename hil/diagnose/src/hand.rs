@@ -935,6 +935,19 @@ impl SubjectArm {
         bounded: true,
     };
 
+    /// The inertia's scale of the tables' `M_arm` in `beta`, a fit of this rival (NaN
+    /// without the inertia's column).
+    #[must_use]
+    pub fn inertia_scale(self, beta: &[f64]) -> f64 {
+        if !self.inertia {
+            return f64::NAN;
+        }
+        1.0 + beta
+            .get(base_columns() + self.rate_columns())
+            .copied()
+            .unwrap_or(f64::NAN)
+    }
+
     fn rate_columns(self) -> usize {
         if self.rates {
             IMPEDANCE_RATE_COLUMNS
@@ -1001,10 +1014,7 @@ impl HandCandidate for SubjectArm {
         let g = |i: usize| own.get(i).copied().unwrap_or(f64::NAN);
         let mut p = Vec::new();
         if self.inertia {
-            p.push((
-                "arm_inertia_scale".to_string(),
-                1.0 + g(self.rate_columns()),
-            ));
+            p.push(("arm_inertia_scale".to_string(), self.inertia_scale(beta)));
         }
         if self.rates {
             for (i, n) in RATE_PARAMETERS.into_iter().enumerate() {
@@ -1167,8 +1177,6 @@ pub struct ReplicateTest {
     pub fits: Vec<CvFit>,
     /// The rival's fit ([`SubjectArm`]).
     pub subject_arm: CvFit,
-    /// The rival's fit with its inertia free ([`SubjectArm::OFF_THE_TABLES`]).
-    pub subject_arm_free: CvFit,
     /// The repetitions themselves (for the joint fits of forward selection).
     pub units: Vec<HandResponse>,
 }
@@ -1204,7 +1212,8 @@ pub struct HandJudgement {
     pub fits: Vec<HandFit>,
     /// The rival's fit ([`SubjectArm`]).
     pub subject_arm: CvFit,
-    /// The rival's fit with its inertia free ([`SubjectArm::OFF_THE_TABLES`]).
+    /// The rival's fit with its inertia free ([`SubjectArm::OFF_THE_TABLES`]), on the
+    /// units and folds the test runs on (the replicates' when there are any).
     pub subject_arm_free: CvFit,
     /// The arm's geometry the balance used.
     pub arm: HandArm,
@@ -1349,11 +1358,6 @@ pub fn judge_hand(
         &folds,
         "subject arm",
     )?;
-    let subject_arm_free = cross_validate(
-        &grams(&SubjectArm::OFF_THE_TABLES, fb_delay_s),
-        &folds,
-        "subject arm off the tables",
-    )?;
     let replicates = match replicates {
         Some(units) => {
             // Leave one repetition out: the most degrees of freedom for the t-test.
@@ -1367,21 +1371,32 @@ pub fn judge_hand(
                 .map(|f| cv(f.candidate.as_ref(), f.candidate.name()))
                 .collect::<Result<Vec<_>, DiscrepancyError>>()?;
             let subject_arm = cv(&SubjectArm::WHOLE, "subject arm (replicates)")?;
-            let subject_arm_free = cv(
-                &SubjectArm::OFF_THE_TABLES,
-                "subject arm off the tables (replicates)",
-            )?;
-
             Some(ReplicateTest {
                 folds,
                 baseline,
                 fits,
                 subject_arm,
-                subject_arm_free,
                 units,
             })
         }
         None => None,
+    };
+    let subject_arm_free = match &replicates {
+        Some(rep) => cross_validate(
+            &grams_of(
+                &rep.units,
+                &SubjectArm::OFF_THE_TABLES,
+                fb_delay_s,
+                &whitening,
+            ),
+            &rep.folds,
+            "subject arm off the tables (replicates)",
+        )?,
+        None => cross_validate(
+            &grams(&SubjectArm::OFF_THE_TABLES, fb_delay_s),
+            &folds,
+            "subject arm off the tables",
+        )?,
     };
     Ok(Ok(HandJudgement {
         responses,
