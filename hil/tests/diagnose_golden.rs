@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "7566a1b954493faddc37971721b5a269cfde70c3a86a09cf9ca5902067690d9b",
+        "cc86927ff9900507bfb322348c25ad8f1dbff9f43aab9abe3cc0dc0d6dac1138",
     ),
     (
         "example-friction",
-        "f6afa99c49226b8f293ac4718b79cc5848b4af55f47846e34aa69e52acd15b2c",
+        "f702db914bddf54634fdeb4460eac7e6764b2328b11410d9d8601494134b5e71",
     ),
     (
         "example-nuisance",
-        "3e9a2a5737a5fdd6b6b2ad20d87cd8360c91623e135844c99a5c037d76fe93f5",
+        "1ccd70e4501d0d2f433c65d2f0e62c2abe59fc9f797d4784beb4950d8e9392bc",
     ),
     (
         "example-rotation-mass",
-        "aa63d256f1e08721bebb13146e5b35dff134ee6d3d783a2acdff2e49b3b5a77c",
+        "1c092b01ee8d45b00b278e3ee84e6f60fa450202afab5e530a4c8d738e36fdfc",
     ),
 ];
 

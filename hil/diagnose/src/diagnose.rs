@@ -240,6 +240,19 @@ pub struct Cause {
     /// model that has them, and its parameters (and theirs) come from one joint fit.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub given: Vec<String>,
+    /// On the hand balance, when the session has repetitions: the share of what the
+    /// model it was judged against leaves above the session's noise floor
+    /// ([`Diagnosis::hand_noise_floor_nrmse`]) that this cause removes, `(b² − e²) /
+    /// (b² − f²)` with `b` and `e` the held-out NRMSE without and with it and `f` the
+    /// floor; 1 when the model with it reaches the floor. What no model can remove, the
+    /// arm's motor noise, bounds [`Self::gain`] by `1 − f/b`; this share is not bounded
+    /// by it. `None` without repetitions or where `b` does not exceed `f`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub share_above_floor: Option<f64>,
+    /// The held-out NRMSE of the model it was judged against and of that model with it
+    /// (from its row: `e / (1 − gain)` and `e`), for [`Self::share_above_floor`].
+    #[serde(skip)]
+    judged_nrmse: [f64; 2],
 }
 
 /// Structure the catalog leaves in a balance: terms of its library (the cart's
@@ -352,6 +365,15 @@ pub struct Diagnosis {
     /// D, K and delayed feedback), normalised by the hand's response force; both
     /// weighted as in [`Self::hand_weighting`].
     pub hand_baseline_nrmse: Option<f64>,
+    /// The held-out NRMSE a hand model missing nothing would leave, weighted alike: the
+    /// noise of the units the gains are measured on, read from the spread of their
+    /// repetitions about their mean under the model of the named hand causes (the
+    /// baseline when none is named; `hand::Whitening::noise_floor_nrmse`). Mostly the
+    /// arm's motor noise, and more under a grip, whose hand kinematics carry the force
+    /// sensor's noise; where nothing is hidden the baseline's NRMSE is about this (0.96–1.17
+    /// of it on generated sessions, 1.18–1.30 on the independent rig's). `None` when the
+    /// units do not average repetitions.
+    pub hand_noise_floor_nrmse: Option<f64>,
     /// The hand balance's row weighting (`super::hand::Whitening`): the correlation
     /// time filtered out, ms, and the matrix `W` between the axes, row-major.
     pub hand_weighting: BTreeMap<String, f64>,
@@ -547,6 +569,15 @@ fn params_with_se(
 }
 
 impl Cause {
+    /// Sets [`Self::share_above_floor`] for the noise floor `f`: `None` where the model it
+    /// was judged against does not exceed the floor.
+    fn above_the_floor(&mut self, f: f64) {
+        let [b, e] = self.judged_nrmse;
+        let excess = b * b - f * f;
+        self.share_above_floor =
+            (excess > 0.0 && b.is_finite() && e.is_finite()).then(|| (b * b - e * e) / excess);
+    }
+
     /// The cause a passing candidate's row names.
     ///
     /// # Errors
@@ -571,6 +602,8 @@ impl Cause {
             parameter_se: r.parameter_se.clone(),
             parameter_range: r.parameter_range.clone(),
             given: r.given.clone(),
+            share_above_floor: None,
+            judged_nrmse: [r.extended_nrmse / (1.0 - r.gain), r.extended_nrmse],
         })
     }
 
@@ -1394,6 +1427,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         hand_units: 0,
         hand_test_units: None,
         hand_baseline_nrmse: None,
+        hand_noise_floor_nrmse: None,
         hand_baseline: BTreeMap::new(),
         hand_weighting: BTreeMap::new(),
         hand_weighting_source: None,
@@ -1830,7 +1864,13 @@ fn rank_hand(
                 min_gain: opts.min_gain,
                 scale,
             };
-            let selected = hand_forward_select(&judge, &ranked)?;
+            let mut selected = hand_forward_select(&judge, &ranked)?;
+            d.hand_noise_floor_nrmse = hand_noise_floor(&h, &selected.members)?;
+            if let Some(f) = d.hand_noise_floor_nrmse {
+                for c in &mut selected.causes {
+                    c.above_the_floor(f);
+                }
+            }
             let (unexplained, arm_scale) = hand_outside_the_catalog(&judge, &selected.members)?;
             d.hand_unexplained = unexplained;
             d.hand_arm_inertia_scale = Some(arm_scale);
@@ -2253,6 +2293,34 @@ fn hand_forward_select(
         lead: Some(lead),
         members: chosen,
     })
+}
+
+/// The hand balance's noise floor ([`Diagnosis::hand_noise_floor_nrmse`]) under the
+/// model of the named effects `members` (the baseline when none is named), fitted on
+/// all units: applied to each repetition's own kinematics, a model that has every effect
+/// the responses carry leaves only the noise in their spread about the mean, where one
+/// that misses an effect would also leave that effect's response to how the
+/// repetitions' movements differ. `None` when the units do not average repetitions.
+///
+/// # Errors
+/// [`DiscrepancyError::Singular`] when the named model cannot be fitted.
+fn hand_noise_floor(
+    h: &HandJudgement,
+    members: &[HandMember],
+) -> Result<Option<f64>, DiscrepancyError> {
+    let Some(rep) = &h.replicates else {
+        return Ok(None);
+    };
+    let joint = settle_grip_load(HandJoint::given(members.to_vec()), h)?;
+    let fit = fit_on_units(h, &joint)?.fit;
+    Ok(h.whitening.noise_floor_nrmse(
+        &joint,
+        &h.responses,
+        &rep.units,
+        fit.setting,
+        &fit.beta,
+        h.fb_delay_s,
+    ))
 }
 
 /// The human-side candidate `kind` at the setting its first-round fit chose on all

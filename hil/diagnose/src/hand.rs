@@ -77,6 +77,16 @@
 //! ([`Whitening::from_repetitions`]), where a misfit common to them cancels, so that the
 //! weighting never weighs down the axis where a hidden effect shows.
 //!
+//! The noise floor: the held-out NRMSE that a model missing nothing would leave, read
+//! from the same spread of the repetitions about their mean, under the model of the
+//! named effects, each repetition's own kinematics through it
+//! ([`Whitening::noise_floor_nrmse`]). With `n` repetitions of a direction their summed
+//! squared spread is `(n − 1) σ²` and the averaged unit's noise `σ²/n`. No model of the
+//! hand goes below it, so it bounds every held-out gain by `1 − f/b`; the diagnosis
+//! reports it and, per named hand cause, the share of the excess over it the cause
+//! removes. Its sampling error is that of 2 degrees of freedom per direction and
+//! sample, correlated over the noise's 50 ms.
+//!
 //! `d` is tied to `p` (`d = ρ p`): the arm's feedback is one PD law whose two gains a
 //! subject scales together (`feedback_gain` of `crate::protocol::subjects`); with both
 //! free, the delayed velocity column takes up what the baseline misses.
@@ -510,6 +520,65 @@ impl Whitening {
             }
         }
         Whitening::between_axes(sigma, WeightSource::Repetitions)
+    }
+
+    /// The held-out NRMSE that a model missing nothing would leave on `averaged` (the
+    /// units that average repetitions) under this weighting: the noise of each
+    /// averaged unit over the normaliser of all. Each repetition's weighted residual
+    /// (coefficients `beta` of `c` at setting `s`) minus that of the averaged unit of its
+    /// direction holds the noise alone, what the model misses being common to both; its
+    /// constant per axis is removed, as each unit's offset is fitted out
+    /// ([`RESPONSE_OFFSET_COLUMNS`]). With `n` repetitions of a direction their summed
+    /// square is `(n − 1) σ²` and the averaged unit's noise `σ²/n`. `None` without a
+    /// direction of at least two repetitions.
+    #[must_use]
+    pub fn noise_floor_nrmse(
+        &self,
+        c: &dyn HandCandidate,
+        averaged: &[HandResponse],
+        repetitions: &[HandResponse],
+        s: usize,
+        beta: &[f64],
+        fb_delay_s: f64,
+    ) -> Option<f64> {
+        let residuals = |r: &HandResponse| -> Vec<f64> {
+            hand_fit_rows(c, r, s, beta, fb_delay_s, Some(self))
+                .into_iter()
+                .map(|(y, fit, _)| y - fit)
+                .collect()
+        };
+        let mut noise = 0.0;
+        let mut norm = 0.0;
+        for a in averaged {
+            norm += hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self))
+                .iter()
+                .map(|(_, _, n)| n * n)
+                .sum::<f64>();
+            let mean = residuals(a);
+            let mut spread = 0.0;
+            let mut n = 0usize;
+            for r in repetitions
+                .iter()
+                .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5)
+            {
+                let e = residuals(r);
+                if e.len() != mean.len() {
+                    continue;
+                }
+                let d: Vec<f64> = e.iter().zip(&mean).map(|(e, m)| e - m).collect();
+                for axis in 0..2 {
+                    let along: Vec<f64> = d.iter().skip(axis).step_by(2).copied().collect();
+                    let m = along.iter().sum::<f64>() / along.len().max(1) as f64;
+                    spread += along.iter().map(|v| (v - m).powi(2)).sum::<f64>();
+                }
+                n += 1;
+            }
+            if n < 2 {
+                return None;
+            }
+            noise += spread / (n * (n - 1)) as f64;
+        }
+        (norm > 0.0).then(|| (noise / norm).sqrt())
     }
 
     /// The time filter and `W = L⁻¹` with `Σ = L Lᵀ` scaled to a unit determinant (the
@@ -2110,6 +2179,127 @@ mod tests {
         assert!(
             (c - Matrix2::identity()).abs().max() > 0.2,
             "the residual's weighting should be pulled by the common part: {c}"
+        );
+    }
+
+    /// Two directions of three repetitions each: a common part the model misses (along
+    /// y only) plus noise first-order autoregressive in time and correlated between the
+    /// axes. The noise floor read from the repetitions must be the held-out NRMSE of the
+    /// averaged units' own noise, computed from the noise itself under the same
+    /// weighting (within 5 %: 2 × 3 × 3000 samples on two axes, so the two variances'
+    /// sampling errors are about 1 % each), and must not see the misfit: with the common
+    /// part ten times larger, the noise it reads (floor² × normaliser) is the same to
+    /// rounding, because the misfit cancels between a repetition and its mean.
+    #[test]
+    fn the_noise_floor_is_the_averaged_units_noise_not_the_misfit() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, StandardNormal};
+        let (rate, n, m) = (500.0, 3000, 3);
+        let phi = (-1.0 / rate / HAND_NOISE_TIME_S).exp();
+        let l = Matrix2::new(1.0, 0.0, 0.8, 0.3);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
+        let angles = [30.0, 60.0];
+        // Per direction, per repetition, the noise on both axes.
+        let noise: Vec<Vec<[Vec<f64>; 2]>> = angles
+            .iter()
+            .map(|_| {
+                (0..m)
+                    .map(|_| {
+                        let mut e = Vector2::zeros();
+                        let mut f = [Vec::with_capacity(n), Vec::with_capacity(n)];
+                        for _ in 0..n {
+                            let xi = Vector2::from_fn(|_, _| StandardNormal.sample(&mut rng));
+                            e = phi * e + l * xi;
+                            f[0].push(e[0]);
+                            f[1].push(e[1]);
+                        }
+                        f
+                    })
+                    .collect()
+            })
+            .collect();
+        let unit = |angle: f64, f: [Vec<f64>; 2]| {
+            let mut r = response(f[0].clone(), rate);
+            r.df[1] = f[1].clone();
+            r.angle_deg = angle;
+            r
+        };
+        let mean = |fs: &[[Vec<f64>; 2]]| -> [Vec<f64>; 2] {
+            std::array::from_fn(|axis| {
+                (0..n)
+                    .map(|i| fs.iter().map(|f| f[axis][i]).sum::<f64>() / fs.len() as f64)
+                    .collect()
+            })
+        };
+        let beta = [0.0; 9];
+        // The repetitions and their means with a common part of amplitude `a` on y.
+        let units = |a: f64| {
+            let common: Vec<f64> = (0..n)
+                .map(|i| a * (2.0 * PI * 3.0 * i as f64 / rate).sin())
+                .collect();
+            let with = |f: &[Vec<f64>; 2]| -> [Vec<f64>; 2] {
+                [
+                    f[0].clone(),
+                    f[1].iter().zip(&common).map(|(e, c)| e + c).collect(),
+                ]
+            };
+            let mut reps = Vec::new();
+            let mut avgs = Vec::new();
+            for (angle, fs) in angles.iter().zip(&noise) {
+                let fs: Vec<[Vec<f64>; 2]> = fs.iter().map(with).collect();
+                reps.extend(fs.iter().map(|f| unit(*angle, f.clone())));
+                avgs.push(unit(*angle, mean(&fs)));
+            }
+            (avgs, reps)
+        };
+        let (avgs, reps) = units(5.0);
+        let Some(w) = Whitening::from_repetitions(&HandBaseline, &avgs, &reps, 0, &beta, 0.06)
+        else {
+            panic!("the repetitions' covariance is positive definite");
+        };
+        let norm = |avgs: &[HandResponse]| -> f64 {
+            avgs.iter()
+                .flat_map(|a| hand_fit_rows(&HandBaseline, a, 0, &beta, 0.06, Some(&w)))
+                .map(|(_, _, v)| v * v)
+                .sum()
+        };
+        // The averaged units' own noise, weighted, its constant per axis removed.
+        let mut truth = 0.0;
+        for (angle, fs) in angles.iter().zip(&noise) {
+            let rows = hand_fit_rows(
+                &HandBaseline,
+                &unit(*angle, mean(fs)),
+                0,
+                &beta,
+                0.06,
+                Some(&w),
+            );
+            for axis in 0..2 {
+                let e: Vec<f64> = rows.iter().skip(axis).step_by(2).map(|r| r.0).collect();
+                let c = e.iter().sum::<f64>() / e.len() as f64;
+                truth += e.iter().map(|v| (v - c).powi(2)).sum::<f64>();
+            }
+        }
+        let want = (truth / norm(&avgs)).sqrt();
+        let floor = |avgs: &[HandResponse], reps: &[HandResponse]| {
+            w.noise_floor_nrmse(&HandBaseline, avgs, reps, 0, &beta, 0.06)
+                .expect("three repetitions per direction")
+        };
+        let f = floor(&avgs, &reps);
+        eprintln!("floor {f:.5}, the averaged units' noise {want:.5}");
+        assert!((f / want - 1.0).abs() < 0.05, "floor {f} for {want}");
+        let (big_avgs, big_reps) = units(50.0);
+        let f_big = floor(&big_avgs, &big_reps);
+        let (read, read_big) = (f * f * norm(&avgs), f_big * f_big * norm(&big_avgs));
+        assert!(
+            (read_big / read - 1.0).abs() < 1e-9,
+            "the noise read moved with the misfit: {read} → {read_big}"
+        );
+        // A single repetition per direction has no spread to read.
+        let singles: Vec<HandResponse> = reps.iter().step_by(m).cloned().collect();
+        assert!(
+            w.noise_floor_nrmse(&HandBaseline, &avgs, &singles, 0, &beta, 0.06)
+                .is_none()
         );
     }
 

@@ -128,6 +128,13 @@ pub fn table(d: &Diagnosis) -> String {
             d.hand_weighting_source.as_deref().unwrap_or("time only"),
             b
         );
+        if let Some(f) = d.hand_noise_floor_nrmse {
+            let _ = writeln!(
+                out,
+                "hand noise floor  held-out NRMSE {f:.4} (the responses' noise under the named causes' model, from the repetitions' spread about their mean): the baseline is at {:.2}× it",
+                b / f
+            );
+        }
     }
     if !d.ranking.is_empty() {
         let _ = writeln!(out);
@@ -269,6 +276,22 @@ pub fn table(d: &Diagnosis) -> String {
                 }
             );
             let _ = writeln!(out, "range: {}: {k} {}: {line}", c.name, sig(v));
+        }
+    }
+    for c in &d.causes {
+        if let Some(share) = c.share_above_floor {
+            let _ = writeln!(
+                out,
+                "above the floor: {}: removes {:.0} % of what {} leaves above the hand's noise floor (its held-out gain of {:.1} % is bounded by that noise)",
+                c.name,
+                100.0 * share,
+                if c.given.is_empty() {
+                    "the baseline".to_string()
+                } else {
+                    format!("the model with {}", c.given.join(" + "))
+                },
+                100.0 * c.gain
+            );
         }
     }
     for u in d.unexplained_structures() {
