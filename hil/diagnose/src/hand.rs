@@ -529,8 +529,11 @@ impl Whitening {
     /// direction holds the noise alone, what the model misses being common to both; its
     /// constant per axis is removed, as each unit's offset is fitted out
     /// ([`RESPONSE_OFFSET_COLUMNS`]). With `n` repetitions of a direction their summed
-    /// square is `(n − 1) σ²` and the averaged unit's noise `σ²/n`. `None` without a
-    /// direction of at least two repetitions.
+    /// square is `(n − 1) σ²` and the averaged unit's noise `σ²/n`. A direction counts
+    /// only when its averaged unit is the mean of at least two of the repetitions (the
+    /// same trials, the same rows): an unmatched repetition on one side of an opposite
+    /// pair is in the mean but in no repetition. The floor is then that of the
+    /// directions that count, over their normaliser; `None` when none does.
     #[must_use]
     pub fn noise_floor_nrmse(
         &self,
@@ -550,33 +553,35 @@ impl Whitening {
         let mut noise = 0.0;
         let mut norm = 0.0;
         for a in averaged {
-            norm += hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self))
+            let reps: Vec<&HandResponse> = repetitions
                 .iter()
-                .map(|(_, _, n)| n * n)
-                .sum::<f64>();
+                .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5 && r.rows == a.rows)
+                .collect();
+            // The averaged unit must be the mean of these repetitions: a direction whose
+            // two sides have different counts averages a repetition no pair holds.
+            let mut trials: Vec<u32> = reps.iter().flat_map(|r| r.trials.clone()).collect();
+            let mut of_unit = a.trials.clone();
+            trials.sort_unstable();
+            of_unit.sort_unstable();
+            let n = reps.len();
+            if n < 2 || trials != of_unit {
+                continue;
+            }
             let mean = residuals(a);
             let mut spread = 0.0;
-            let mut n = 0usize;
-            for r in repetitions
-                .iter()
-                .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5)
-            {
-                let e = residuals(r);
-                if e.len() != mean.len() {
-                    continue;
-                }
-                let d: Vec<f64> = e.iter().zip(&mean).map(|(e, m)| e - m).collect();
+            for r in reps {
+                let d: Vec<f64> = residuals(r).iter().zip(&mean).map(|(e, m)| e - m).collect();
                 for axis in 0..2 {
                     let along: Vec<f64> = d.iter().skip(axis).step_by(2).copied().collect();
                     let m = along.iter().sum::<f64>() / along.len().max(1) as f64;
                     spread += along.iter().map(|v| (v - m).powi(2)).sum::<f64>();
                 }
-                n += 1;
-            }
-            if n < 2 {
-                return None;
             }
             noise += spread / (n * (n - 1)) as f64;
+            norm += hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self))
+                .iter()
+                .map(|(_, _, v)| v * v)
+                .sum::<f64>();
         }
         (norm > 0.0).then(|| (noise / norm).sqrt())
     }
@@ -2218,12 +2223,19 @@ mod tests {
                     .collect()
             })
             .collect();
-        let unit = |angle: f64, f: [Vec<f64>; 2]| {
+        let unit = |angle: f64, f: [Vec<f64>; 2], trials: Vec<u32>| {
             let mut r = response(f[0].clone(), rate);
             r.df[1] = f[1].clone();
             r.angle_deg = angle;
+            r.trials = trials;
             r
         };
+        // Repetition `j` of direction `i` is the odd part of trials `2k` and `2k + 1`.
+        let trials_of = |i: usize, j: usize| {
+            let k = (i * m + j) as u32;
+            vec![2 * k, 2 * k + 1]
+        };
+        let all_trials = |i: usize| (0..m).flat_map(|j| trials_of(i, j)).collect::<Vec<_>>();
         let mean = |fs: &[[Vec<f64>; 2]]| -> [Vec<f64>; 2] {
             std::array::from_fn(|axis| {
                 (0..n)
@@ -2245,10 +2257,14 @@ mod tests {
             };
             let mut reps = Vec::new();
             let mut avgs = Vec::new();
-            for (angle, fs) in angles.iter().zip(&noise) {
+            for (i, (angle, fs)) in angles.iter().zip(&noise).enumerate() {
                 let fs: Vec<[Vec<f64>; 2]> = fs.iter().map(with).collect();
-                reps.extend(fs.iter().map(|f| unit(*angle, f.clone())));
-                avgs.push(unit(*angle, mean(&fs)));
+                reps.extend(
+                    fs.iter()
+                        .enumerate()
+                        .map(|(j, f)| unit(*angle, f.clone(), trials_of(i, j))),
+                );
+                avgs.push(unit(*angle, mean(&fs), all_trials(i)));
             }
             (avgs, reps)
         };
@@ -2265,10 +2281,10 @@ mod tests {
         };
         // The averaged units' own noise, weighted, its constant per axis removed.
         let mut truth = 0.0;
-        for (angle, fs) in angles.iter().zip(&noise) {
+        for (i, (angle, fs)) in angles.iter().zip(&noise).enumerate() {
             let rows = hand_fit_rows(
                 &HandBaseline,
-                &unit(*angle, mean(fs)),
+                &unit(*angle, mean(fs), all_trials(i)),
                 0,
                 &beta,
                 0.06,
@@ -2300,6 +2316,16 @@ mod tests {
         assert!(
             w.noise_floor_nrmse(&HandBaseline, &avgs, &singles, 0, &beta, 0.06)
                 .is_none()
+        );
+        // A direction whose mean holds a trial no repetition has (an unmatched pulse on
+        // one side of the pair) is left out: the floor is the other direction's alone.
+        let mut unmatched = avgs.clone();
+        unmatched[1].trials.push(999);
+        let first_alone = floor(&avgs[..1], &reps);
+        let with_unmatched = floor(&unmatched, &reps);
+        assert!(
+            (with_unmatched - first_alone).abs() < 1e-12 * first_alone,
+            "{with_unmatched} for {first_alone}"
         );
     }
 
