@@ -2086,6 +2086,28 @@ mod tests {
         );
     }
 
+    /// The innovations' shape `L` of [`correlated_noise`]: the y axis follows x.
+    fn noise_shape() -> Matrix2<f64> {
+        Matrix2::new(1.0, 0.0, 0.8, 0.3)
+    }
+
+    /// `n` samples at `rate` of a residual first-order autoregressive in time with the
+    /// weighting's own `φ` and innovations `L ξ` ([`noise_shape`]), `ξ` standard normal.
+    fn correlated_noise(rng: &mut rand_chacha::ChaCha8Rng, n: usize, rate: f64) -> [Vec<f64>; 2] {
+        use rand_distr::{Distribution, StandardNormal};
+        let phi = (-1.0 / rate / HAND_NOISE_TIME_S).exp();
+        let l = noise_shape();
+        let mut e = Vector2::zeros();
+        let mut f = [Vec::with_capacity(n), Vec::with_capacity(n)];
+        for _ in 0..n {
+            let xi = Vector2::from_fn(|_, _| StandardNormal.sample(&mut *rng));
+            e = phi * e + l * xi;
+            f[0].push(e[0]);
+            f[1].push(e[1]);
+        }
+        f
+    }
+
     /// A residual that is first-order autoregressive in time with the weighting's own
     /// `φ` and innovations `L ξ` correlated between the axes: the fitted weighting's `W`
     /// makes the innovations' covariance a multiple of the identity. 20 000 samples, so
@@ -2093,19 +2115,10 @@ mod tests {
     #[test]
     fn fitted_weighting_decorrelates_the_axes() {
         use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
         let (rate, n) = (500.0, 20_000);
-        let phi = (-1.0 / rate / HAND_NOISE_TIME_S).exp();
-        let l = Matrix2::new(1.0, 0.0, 0.8, 0.3);
+        let l = noise_shape();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let mut e = Vector2::zeros();
-        let mut f = [Vec::with_capacity(n), Vec::with_capacity(n)];
-        for _ in 0..n {
-            let xi = Vector2::from_fn(|_, _| StandardNormal.sample(&mut rng));
-            e = phi * e + l * xi;
-            f[0].push(e[0]);
-            f[1].push(e[1]);
-        }
+        let f = correlated_noise(&mut rng, n, rate);
         let mut r = response(f[0].clone(), rate);
         r.df[1] = f[1].clone();
         // No motion: the residual of zero coefficients is the target, `−ΔF`.
@@ -2131,26 +2144,17 @@ mod tests {
     #[test]
     fn repetitions_weigh_by_the_noise_not_by_the_misfit() {
         use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
         let (rate, n, m) = (500.0, 4000, 6);
-        let phi = (-1.0 / rate / HAND_NOISE_TIME_S).exp();
-        let l = Matrix2::new(1.0, 0.0, 0.8, 0.3);
+        let l = noise_shape();
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
         let common: Vec<f64> = (0..n)
             .map(|i| 5.0 * (2.0 * PI * 3.0 * i as f64 / rate).sin())
             .collect();
         let reps: Vec<HandResponse> = (0..m)
             .map(|_| {
-                let mut e = Vector2::zeros();
-                let mut f = [Vec::with_capacity(n), Vec::with_capacity(n)];
-                for c in &common {
-                    let xi = Vector2::from_fn(|_, _| StandardNormal.sample(&mut rng));
-                    e = phi * e + l * xi;
-                    f[0].push(e[0]);
-                    f[1].push(e[1] + c);
-                }
+                let f = correlated_noise(&mut rng, n, rate);
                 let mut r = response(f[0].clone(), rate);
-                r.df[1] = f[1].clone();
+                r.df[1] = f[1].iter().zip(&common).map(|(e, c)| e + c).collect();
                 r
             })
             .collect();
@@ -2198,10 +2202,7 @@ mod tests {
     #[test]
     fn the_noise_floor_is_the_averaged_units_noise_not_the_misfit() {
         use rand::SeedableRng;
-        use rand_distr::{Distribution, StandardNormal};
         let (rate, n, m) = (500.0, 3000, 3);
-        let phi = (-1.0 / rate / HAND_NOISE_TIME_S).exp();
-        let l = Matrix2::new(1.0, 0.0, 0.8, 0.3);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(13);
         let angles = [30.0, 60.0];
         // Per direction, per repetition, the noise on both axes.
@@ -2209,17 +2210,7 @@ mod tests {
             .iter()
             .map(|_| {
                 (0..m)
-                    .map(|_| {
-                        let mut e = Vector2::zeros();
-                        let mut f = [Vec::with_capacity(n), Vec::with_capacity(n)];
-                        for _ in 0..n {
-                            let xi = Vector2::from_fn(|_, _| StandardNormal.sample(&mut rng));
-                            e = phi * e + l * xi;
-                            f[0].push(e[0]);
-                            f[1].push(e[1]);
-                        }
-                        f
-                    })
+                    .map(|_| correlated_noise(&mut rng, n, rate))
                     .collect()
             })
             .collect();
