@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "cc86927ff9900507bfb322348c25ad8f1dbff9f43aab9abe3cc0dc0d6dac1138",
+        "b5a49a28e42ae8e228d9d00c420bb862bc12a66862d42cf556d1569dd874446b",
     ),
     (
         "example-friction",
-        "f702db914bddf54634fdeb4460eac7e6764b2328b11410d9d8601494134b5e71",
+        "ce43962203f3908e2c4bf5181e291a1c35557a77279954c1914031dc55623dfc",
     ),
     (
         "example-nuisance",
-        "1ccd70e4501d0d2f433c65d2f0e62c2abe59fc9f797d4784beb4950d8e9392bc",
+        "bbe513fff703447e06e77ad82a15ef7ff6fcbe4a3db4642dfe18383815c0da45",
     ),
     (
         "example-rotation-mass",
-        "1c092b01ee8d45b00b278e3ee84e6f60fa450202afab5e530a4c8d738e36fdfc",
+        "2e0c08a36e5ef8d90d3f89975769e067447c1f11d36e2796888b896fe30925a9",
     ),
 ];
 

@@ -36,6 +36,11 @@
 //! once. The normaliser of the NRMSE is the motor command itself: the error is the
 //! error of predicting the force the motor had to make.
 //!
+//! What no model removes is the rig's noise: the current loop's, in the motor force and
+//! not in the logged command, and the encoder's and the sensor's. It is read from the
+//! rows where the carts stand still at a trial's start and end, under the model of the
+//! named causes ([`still_noise_floor`]): the noise floor every held-out gain is bounded by.
+//!
 //! A rig of one axis (`axes = ["x"]`, a linear servo stage) writes the other axis's
 //! columns as zeros: that axis contributes no rows, and its columns, which no row
 //! touches, are held at zero by [`Gram::solve`]. A rig without a handle force sensor
@@ -215,6 +220,62 @@ pub fn residual_rows(
         }
         e
     })
+}
+
+/// The carts' speed below which a row counts as still for [`still_noise_floor`], m/s:
+/// a held handle drifts by a few mm/s; a reach's speed is a hundred times that.
+pub const STILL_SPEED_M_PER_S: f64 = 0.003;
+/// How far from a trial's start or end a still row may lie, s: the protocol's still
+/// phases (0.25 s before the reach, 0.25 s after it), not a pause within the movement.
+pub const STILL_EDGE_S: f64 = 0.2;
+/// The fewest still rows, as a share of all, that [`still_noise_floor`] reads.
+pub const STILL_MIN_SHARE: f64 = 0.01;
+
+/// The held-out NRMSE a cart model missing nothing would leave, read from the rows
+/// where the carts stand still at a trial's start or end ([`STILL_SPEED_M_PER_S`],
+/// [`STILL_EDGE_S`]): candidate `c` at setting `s` with coefficients `beta` (the model
+/// of the named causes). There the balance's effects act little (no acceleration to
+/// misweigh, a steady command a delay does not shift) and its residual is the rig's
+/// noise: the current loop's (in the motor force, not in the logged command) and the
+/// encoder's and sensor's. Its mean square, spread over every row, over the
+/// normaliser's sum of squares. A noise stationary over the trial is assumed; a current
+/// noise that grows with the current makes this a lower bound. `None` with fewer still
+/// rows than [`STILL_MIN_SHARE`] of all.
+///
+/// # Errors
+/// As [`Designed::design`].
+pub fn still_noise_floor(
+    c: &(impl Designed + ?Sized),
+    s: usize,
+    beta: &[f64],
+    signals: &[BalanceSignals],
+    latency_s: f64,
+) -> Result<Option<f64>, DiscrepancyError> {
+    let (mut still_ss, mut still, mut all, mut norm) = (0.0, 0usize, 0usize, 0.0);
+    for sig in signals {
+        let design = c.design(sig, s, latency_s)?;
+        let e = design.residual(sig, beta);
+        let v = [sig.at_rows(&sig.v[0]), sig.at_rows(&sig.v[1])];
+        let last = sig.rows.last().copied().unwrap_or(0) as f64 / sig.rate_hz;
+        for axis in (0..2).filter(|a| sig.present(*a)) {
+            for (r, &row) in sig.rows.iter().enumerate() {
+                let t = row as f64 / sig.rate_hz;
+                if v[0][r].abs() < STILL_SPEED_M_PER_S
+                    && v[1][r].abs() < STILL_SPEED_M_PER_S
+                    && (t < STILL_EDGE_S || t > last - STILL_EDGE_S)
+                {
+                    still_ss += e[axis][r] * e[axis][r];
+                    still += 1;
+                }
+                all += 1;
+                norm += design.norm[axis][r] * design.norm[axis][r];
+            }
+        }
+    }
+    if (still as f64) < STILL_MIN_SHARE * all as f64 || still == 0 || norm <= 0.0 {
+        return Ok(None);
+    }
+    Ok(Some((still_ss / still as f64 * all as f64 / norm).sqrt()))
 }
 
 /// The nominal balance's target `u(t − latency) + F` on the evaluated rows of `axis`,

@@ -67,7 +67,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bands::{BANDS_HZ, band_power};
-use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS};
+use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS, still_noise_floor};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
@@ -240,13 +240,14 @@ pub struct Cause {
     /// model that has them, and its parameters (and theirs) come from one joint fit.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub given: Vec<String>,
-    /// On the hand balance, when the session has repetitions: the share of what the
-    /// model it was judged against leaves above the session's noise floor
-    /// ([`Diagnosis::hand_noise_floor_nrmse`]) that this cause removes, `(b² − e²) /
+    /// The share of what the model it was judged against leaves above its balance's
+    /// noise floor ([`Diagnosis::cart_noise_floor_nrmse`],
+    /// [`Diagnosis::hand_noise_floor_nrmse`]) that this cause removes, `(b² − e²) /
     /// (b² − f²)` with `b` and `e` the held-out NRMSE without and with it and `f` the
-    /// floor; 1 when the model with it reaches the floor. What no model can remove, the
-    /// arm's motor noise, bounds [`Self::gain`] by `1 − f/b`; this share is not bounded
-    /// by it. `None` without repetitions or where `b` does not exceed `f`.
+    /// floor; 1 when the model with it reaches the floor. What no model can remove (the
+    /// current loop's noise, the arm's motor noise) bounds [`Self::gain`] by `1 − f/b`;
+    /// this share is not bounded by it. `None` where the balance has no floor or `b`
+    /// does not exceed `f`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub share_above_floor: Option<f64>,
     /// The held-out NRMSE of the model it was judged against and of that model with it
@@ -351,6 +352,13 @@ pub struct Diagnosis {
     pub model: BTreeMap<String, f64>,
     /// Held-out NRMSE of the nominal cart balance (whatever the cause).
     pub cart_baseline_nrmse: Option<f64>,
+    /// The held-out NRMSE a cart model missing nothing would leave: the rig's noise
+    /// (the current loop's, in the motor force and not in the logged command, and the
+    /// encoder's and sensor's), read from the rows where the carts stand still at the
+    /// trials' start and end under the model of the named plant-side causes (the
+    /// baseline when none is named; `candidate::still_noise_floor`). Where nothing is
+    /// hidden the cart baseline's NRMSE is about this. `None` without such rows.
+    pub cart_noise_floor_nrmse: Option<f64>,
     /// Perturbed trials whose response the hand balance used.
     pub hand_trials_used: usize,
     /// Units the hand balance is fitted and its gains measured on: pairs of opposite
@@ -1423,6 +1431,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         baseline: BTreeMap::new(),
         model: BTreeMap::new(),
         cart_baseline_nrmse: None,
+        cart_noise_floor_nrmse: None,
         hand_trials_used: 0,
         hand_units: 0,
         hand_test_units: None,
@@ -1717,7 +1726,7 @@ fn judge_cart(
     ranked.sort_by(|a, b| b.0.gain.total_cmp(&a.0.gain));
     let selection = forward_select(&ranked, &judge, &folds)?;
     d.conditional = selection.rounds.clone();
-    let (kept, unexplained) = outside_the_catalog(&selection, &mut ranked, &judge, &folds)?;
+    let (mut kept, unexplained) = outside_the_catalog(&selection, &mut ranked, &judge, &folds)?;
     d.unexplained = unexplained;
     let members: Vec<Member> = selection
         .members
@@ -1735,15 +1744,23 @@ fn judge_cart(
                 .to_string()
         })
         .collect();
-    d.model = if members.is_empty() {
-        d.baseline.clone()
+    // The noise floor under the model of the named causes (the baseline's without).
+    d.cart_noise_floor_nrmse = if members.is_empty() {
+        d.model = d.baseline.clone();
+        still_noise_floor(&Baseline, 0, &baseline.beta, signals, latency_s)?
     } else {
         let joint = Joint::given(members);
         let fit = cross_validate(&grams_of(&joint, signals, latency_s)?, &folds, "the model")?;
         let mut m = nominal_parameters(&fit.beta, signals);
         m.insert("latency_ms".to_string(), latency_s * 1e3);
-        m
+        d.model = m;
+        still_noise_floor(&joint, fit.setting, &fit.beta, signals, latency_s)?
     };
+    if let Some(f) = d.cart_noise_floor_nrmse {
+        for c in &mut kept {
+            c.above_the_floor(f);
+        }
+    }
     d.baseline_nrmse = Some(base_nrmse);
     Ok(CartJudgement {
         folds,

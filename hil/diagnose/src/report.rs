@@ -104,6 +104,13 @@ pub fn table(d: &Diagnosis) -> String {
             b
         );
     }
+    if let (Some(b), Some(f)) = (d.cart_baseline_nrmse, d.cart_noise_floor_nrmse) {
+        let _ = writeln!(
+            out,
+            "cart noise floor  held-out NRMSE {f:.4} (the rig's noise under the named causes' model, from the rows where the carts stand still): the baseline is at {:.2}× it",
+            b / f
+        );
+    }
     if let Some(b) = d.hand_baseline_nrmse {
         let _ = writeln!(
             out,
@@ -282,7 +289,7 @@ pub fn table(d: &Diagnosis) -> String {
         if let Some(share) = c.share_above_floor {
             let _ = writeln!(
                 out,
-                "above the floor: {}: removes {:.0} % of what {} leaves above the hand's noise floor (its held-out gain of {:.1} % is bounded by that noise)",
+                "above the floor: {}: removes {:.0} % of what {} leaves above the {} balance's noise floor (its held-out gain of {:.1} % is bounded by that noise)",
                 c.name,
                 100.0 * share,
                 if c.given.is_empty() {
@@ -290,6 +297,7 @@ pub fn table(d: &Diagnosis) -> String {
                 } else {
                     format!("the model with {}", c.given.join(" + "))
                 },
+                c.balance,
                 100.0 * c.gain
             );
         }
