@@ -48,6 +48,29 @@ fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis
     generate_and_diagnose(effect, seed, design, &tmp.path().join("out")).unwrap()
 }
 
+/// The first named cause removes at least `at_least` of what the baseline leaves above
+/// its balance's noise floor (`Cause::share_above_floor`), which the session must have.
+fn assert_share_above_floor(d: &Diagnosis, at_least: f64) {
+    let c = &d.causes[0];
+    let share = c.share_above_floor.unwrap_or_else(|| {
+        panic!(
+            "{}: no floor on the {} balance, or a baseline under it",
+            c.name.name(),
+            c.balance
+        )
+    });
+    eprintln!(
+        "{} removes {share:.3} of the excess over the {} balance's floor",
+        c.name.name(),
+        c.balance
+    );
+    assert!(
+        share >= at_least,
+        "{} removes {share} of the excess over the floor",
+        c.name.name()
+    );
+}
+
 fn check(effect: &str, seed: u64) -> (Generated, Diagnosis) {
     check_with_gain(effect, seed, 0.5)
 }
@@ -316,14 +339,7 @@ fn reaches_without_pulses_name_no_friction_the_motor_gains_stand_in_for() {
 #[test]
 fn hidden_actuation_delay_is_found() {
     let (_, d) = check_with_gain("actuation-delay", 14, 0.10);
-    let share = d.causes[0]
-        .share_above_floor
-        .expect("a floor from the still rows, and a baseline above it");
-    eprintln!("the delay removes {share:.3} of the excess over the cart's floor");
-    assert!(
-        share >= 0.5,
-        "the delay removes {share} of the excess over the floor"
-    );
+    assert_share_above_floor(&d, 0.5);
 }
 
 #[test]
@@ -439,13 +455,7 @@ fn a_soft_lightly_damped_grip_is_not_taken_for_the_arm() {
 #[test]
 fn hidden_handle_mass_is_found() {
     let (_, d) = check("handle-mass", 1003);
-    let share = d.causes[0]
-        .share_above_floor
-        .expect("a floor from the repetitions, and a baseline above it");
-    assert!(
-        share >= 0.8,
-        "the mass removes {share} of the excess over the floor"
-    );
+    assert_share_above_floor(&d, 0.8);
 }
 
 /// A subject whose arm is heavier than the tables the diagnosis takes it from (every
@@ -687,13 +697,7 @@ fn hidden_stretch_reflex_is_named_under_motor_noise() {
     };
     let ratio = product(&d.parameters) / product(&g.hidden.parameters);
     assert!((0.8..=1.5).contains(&ratio), "g δ found / hidden {ratio}");
-    let share = d.causes[0]
-        .share_above_floor
-        .expect("a floor from the repetitions, and a baseline above it");
-    assert!(
-        share >= 0.5,
-        "the reflex removes {share} of the excess over the floor"
-    );
+    assert_share_above_floor(&d, 0.5);
     // And the diagnosis says so: the delays its folds cannot tell from the best hold
     // the hidden one and span more than ±20 % of the found one (12.5–42.5 ms here).
     let (range, found, hidden) = reflex_delay_range(&g, &d);

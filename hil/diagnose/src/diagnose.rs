@@ -1744,17 +1744,17 @@ fn judge_cart(
                 .to_string()
         })
         .collect();
-    // The noise floor under the model of the named causes (the baseline's without).
-    d.cart_noise_floor_nrmse = if members.is_empty() {
-        d.model = d.baseline.clone();
-        still_noise_floor(&Baseline, 0, &baseline.beta, signals, latency_s)?
+    // The model of the named causes (the baseline without), and the noise floor under it.
+    (d.model, d.cart_noise_floor_nrmse) = if members.is_empty() {
+        let floor = still_noise_floor(&Baseline, 0, &baseline.beta, signals, latency_s)?;
+        (d.baseline.clone(), floor)
     } else {
         let joint = Joint::given(members);
         let fit = cross_validate(&grams_of(&joint, signals, latency_s)?, &folds, "the model")?;
         let mut m = nominal_parameters(&fit.beta, signals);
         m.insert("latency_ms".to_string(), latency_s * 1e3);
-        d.model = m;
-        still_noise_floor(&joint, fit.setting, &fit.beta, signals, latency_s)?
+        let floor = still_noise_floor(&joint, fit.setting, &fit.beta, signals, latency_s)?;
+        (m, floor)
     };
     if let Some(f) = d.cart_noise_floor_nrmse {
         for c in &mut kept {
@@ -1882,13 +1882,18 @@ fn rank_hand(
                 scale,
             };
             let mut selected = hand_forward_select(&judge, &ranked)?;
-            d.hand_noise_floor_nrmse = hand_noise_floor(&h, &selected.members)?;
+            // The named effects' model, fitted once: the floor is read under it and the
+            // hand's library starts from it.
+            let named_joint = settle_grip_load(HandJoint::given(selected.members.clone()), &h)?;
+            let named_fit = fit_on_units(&h, &named_joint)?;
+            d.hand_noise_floor_nrmse = hand_noise_floor(&h, &named_joint, &named_fit.fit);
             if let Some(f) = d.hand_noise_floor_nrmse {
                 for c in &mut selected.causes {
                     c.above_the_floor(f);
                 }
             }
-            let (unexplained, arm_scale) = hand_outside_the_catalog(&judge, &selected.members)?;
+            let (unexplained, arm_scale) =
+                hand_outside_the_catalog(&judge, &selected.members, named_joint, named_fit)?;
             d.hand_unexplained = unexplained;
             d.hand_arm_inertia_scale = Some(arm_scale);
             hand_named = selected.causes;
@@ -2313,31 +2318,21 @@ fn hand_forward_select(
 }
 
 /// The hand balance's noise floor ([`Diagnosis::hand_noise_floor_nrmse`]) under the
-/// model of the named effects `members` (the baseline when none is named), fitted on
-/// all units: applied to each repetition's own kinematics, a model that has every effect
-/// the responses carry leaves only the noise in their spread about the mean, where one
-/// that misses an effect would also leave that effect's response to how the
-/// repetitions' movements differ. `None` when the units do not average repetitions.
-///
-/// # Errors
-/// [`DiscrepancyError::Singular`] when the named model cannot be fitted.
-fn hand_noise_floor(
-    h: &HandJudgement,
-    members: &[HandMember],
-) -> Result<Option<f64>, DiscrepancyError> {
-    let Some(rep) = &h.replicates else {
-        return Ok(None);
-    };
-    let joint = settle_grip_load(HandJoint::given(members.to_vec()), h)?;
-    let fit = fit_on_units(h, &joint)?.fit;
-    Ok(h.whitening.noise_floor_nrmse(
-        &joint,
+/// model of the named effects, `joint` with its fit on all units `fit` (the baseline
+/// when none is named): applied to each repetition's own kinematics, a model that has
+/// every effect the responses carry leaves only the noise in their spread about the
+/// mean, where one that misses an effect would also leave that effect's response to how
+/// the repetitions' movements differ. `None` when the units do not average repetitions.
+fn hand_noise_floor(h: &HandJudgement, joint: &HandJoint, fit: &CvFit) -> Option<f64> {
+    let rep = h.replicates.as_ref()?;
+    h.whitening.noise_floor_nrmse(
+        joint,
         &h.responses,
         &rep.units,
         fit.setting,
         &fit.beta,
         h.fb_delay_s,
-    ))
+    )
 }
 
 /// The human-side candidate `kind` at the setting its first-round fit chose on all
@@ -2451,11 +2446,11 @@ fn hand_masked_pair(judge: &HandJudge<'_>) -> Result<Option<MaskedPair>, Discrep
 fn hand_outside_the_catalog(
     judge: &HandJudge<'_>,
     named: &[HandMember],
+    named_joint: HandJoint,
+    named_fit: HandJointFit,
 ) -> Result<(Option<Unexplained>, f64), DiscrepancyError> {
     let h = judge.h;
     let given = |members: &[HandMember]| settle_grip_load(HandJoint::given(members.to_vec()), h);
-    let named_joint = given(named)?;
-    let named_fit = fit_on_units(h, &named_joint)?;
     // The arm's inertia, then its impedance's rates given it, each entering when it
     // passes against what entered before.
     let (arm_row, arm_joint, arm_fit) =

@@ -567,7 +567,9 @@ impl Whitening {
             if n < 2 || trials != of_unit {
                 continue;
             }
-            let mean = residuals(a);
+            // The averaged unit's rows give its residual and the normaliser alike.
+            let rows = hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self));
+            let mean: Vec<f64> = rows.iter().map(|(y, fit, _)| y - fit).collect();
             let mut spread = 0.0;
             for r in reps {
                 let d: Vec<f64> = residuals(r).iter().zip(&mean).map(|(e, m)| e - m).collect();
@@ -578,10 +580,7 @@ impl Whitening {
                 }
             }
             noise += spread / (n * (n - 1)) as f64;
-            norm += hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self))
-                .iter()
-                .map(|(_, _, v)| v * v)
-                .sum::<f64>();
+            norm += rows.iter().map(|(_, _, v)| v * v).sum::<f64>();
         }
         (norm > 0.0).then(|| (noise / norm).sqrt())
     }
