@@ -430,7 +430,8 @@ pub(crate) fn effect_rows(
 /// [`Whitening::noise_time_s`], `Δt` the rows' spacing), then each sample's pair of axes
 /// is multiplied by `W` with `WᵀW ∝ Σ⁻¹`, `Σ` the covariance between the axes of the
 /// time-filtered noise ([`Whitening::from_repetitions`]; the baseline's residual,
-/// [`Whitening::fitted`], for sessions without repetitions). Regressors, target and
+/// [`Whitening::fitted`], for sessions without repetitions, or none whose direction's
+/// mean is theirs). Regressors, target and
 /// normaliser alike: a linear law that holds for the rows holds for the weighted rows
 /// with the same coefficients, and the NRMSE is that of the weighted force.
 ///
@@ -465,7 +466,8 @@ impl Whitening {
 
     /// The time filter and `W` from the residual of coefficients `beta` of candidate
     /// `c` at setting `s` over `units`, filtered in time. The fallback of
-    /// [`Whitening::from_repetitions`] for sessions without repetitions: this residual
+    /// [`Whitening::from_repetitions`] for sessions without repetitions whose
+    /// direction's mean is theirs (a session cut short, pulses dropped): this residual
     /// holds whatever effect the baseline misses besides the noise, so it weighs down
     /// the axis where that effect shows. The time filter alone when the covariance is
     /// not positive definite.
@@ -489,9 +491,11 @@ impl Whitening {
     /// The time filter and `W` from the noise alone: the spread of the repetitions
     /// about their mean. Each repetition's time-filtered residual (coefficients `beta`
     /// of `c` at setting `s`) minus that of the averaged unit of its direction: what the
-    /// model misses is common to both and cancels, the motor noise does not. `None`
-    /// when no repetition has an averaged unit of its direction (matched by angle) or
-    /// the covariance is not positive definite.
+    /// model misses is common to both and cancels, the motor noise does not. Only the
+    /// directions whose averaged unit is the mean of their repetitions count
+    /// ([`matched_repetitions`]): an unmatched repetition's difference from the mean
+    /// would hold a part of the misfit. `None` when no direction counts or the
+    /// covariance is not positive definite.
     #[must_use]
     pub fn from_repetitions(
         c: &dyn HandCandidate,
@@ -502,21 +506,17 @@ impl Whitening {
         fb_delay_s: f64,
     ) -> Option<Whitening> {
         let residuals = |r: &HandResponse| time_filtered_residuals(c, r, s, beta, fb_delay_s);
-        let means: Vec<(f64, Vec<Vector2<f64>>)> = averaged
-            .iter()
-            .map(|a| (a.angle_deg, residuals(a)))
-            .collect();
         let mut sigma = Matrix2::zeros();
-        for r in repetitions {
-            let Some((_, mean)) = means
-                .iter()
-                .find(|(angle, _)| (angle - r.angle_deg).abs() < 0.5)
-            else {
+        for a in averaged {
+            let Some(reps) = matched_repetitions(a, repetitions) else {
                 continue;
             };
-            for (e, m) in residuals(r).iter().zip(mean) {
-                let d = e - m;
-                sigma += d * d.transpose();
+            let mean = residuals(a);
+            for r in reps {
+                for (e, m) in residuals(r).iter().zip(&mean) {
+                    let d = e - m;
+                    sigma += d * d.transpose();
+                }
             }
         }
         Whitening::between_axes(sigma, WeightSource::Repetitions)
@@ -530,10 +530,9 @@ impl Whitening {
     /// constant per axis is removed, as each unit's offset is fitted out
     /// ([`RESPONSE_OFFSET_COLUMNS`]). With `n` repetitions of a direction their summed
     /// square is `(n − 1) σ²` and the averaged unit's noise `σ²/n`. A direction counts
-    /// only when its averaged unit is the mean of at least two of the repetitions (the
-    /// same trials, the same rows): an unmatched repetition on one side of an opposite
-    /// pair is in the mean but in no repetition. The floor is then that of the
-    /// directions that count, over their normaliser; `None` when none does.
+    /// only when its averaged unit is the mean of its repetitions
+    /// ([`matched_repetitions`]). The floor is then that of the directions that count,
+    /// over their normaliser; `None` when none does.
     #[must_use]
     pub fn noise_floor_nrmse(
         &self,
@@ -553,20 +552,10 @@ impl Whitening {
         let mut noise = 0.0;
         let mut norm = 0.0;
         for a in averaged {
-            let reps: Vec<&HandResponse> = repetitions
-                .iter()
-                .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5 && r.rows == a.rows)
-                .collect();
-            // The averaged unit must be the mean of these repetitions: a direction whose
-            // two sides have different counts averages a repetition no pair holds.
-            let mut trials: Vec<u32> = reps.iter().flat_map(|r| r.trials.clone()).collect();
-            let mut of_unit = a.trials.clone();
-            trials.sort_unstable();
-            of_unit.sort_unstable();
-            let n = reps.len();
-            if n < 2 || trials != of_unit {
+            let Some(reps) = matched_repetitions(a, repetitions) else {
                 continue;
-            }
+            };
+            let n = reps.len();
             // The averaged unit's rows give its residual and the normaliser alike.
             let rows = hand_fit_rows(c, a, s, beta, fb_delay_s, Some(self));
             let mean: Vec<f64> = rows.iter().map(|(y, fit, _)| y - fit).collect();
@@ -602,6 +591,25 @@ impl Whitening {
             ..Whitening::in_time()
         })
     }
+}
+
+/// The repetitions of the direction of the averaged unit `a` (the same angle, the same
+/// rows), when `a` is their mean: at least two of them, and together the same trials as
+/// `a`. `None` otherwise: a direction whose two sides of an opposite pair have different
+/// counts averages a repetition that no pair holds, and one repetition has no spread.
+fn matched_repetitions<'a>(
+    a: &HandResponse,
+    repetitions: &'a [HandResponse],
+) -> Option<Vec<&'a HandResponse>> {
+    let reps: Vec<&HandResponse> = repetitions
+        .iter()
+        .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5 && r.rows == a.rows)
+        .collect();
+    let mut trials: Vec<u32> = reps.iter().flat_map(|r| r.trials.clone()).collect();
+    let mut of_unit = a.trials.clone();
+    trials.sort_unstable();
+    of_unit.sort_unstable();
+    (reps.len() >= 2 && trials == of_unit).then_some(reps)
 }
 
 /// The residual `(x, y)` per evaluated sample of coefficients `beta` of `c` at setting
@@ -2150,14 +2158,17 @@ mod tests {
             .map(|i| 5.0 * (2.0 * PI * 3.0 * i as f64 / rate).sin())
             .collect();
         let reps: Vec<HandResponse> = (0..m)
-            .map(|_| {
+            .map(|j| {
                 let f = correlated_noise(&mut rng, n, rate);
                 let mut r = response(f[0].clone(), rate);
                 r.df[1] = f[1].iter().zip(&common).map(|(e, c)| e + c).collect();
+                r.trials = vec![j as u32];
                 r
             })
             .collect();
+        // The mean of the repetitions, of their trials.
         let mut avg = response(vec![0.0; n], rate);
+        avg.trials = (0..m as u32).collect();
         for axis in 0..2 {
             avg.df[axis] = (0..n)
                 .map(|i| reps.iter().map(|r| r.df[axis][i]).sum::<f64>() / m as f64)
@@ -2197,7 +2208,9 @@ mod tests {
     /// weighting (within 5 %: 2 × 3 × 3000 samples on two axes, so the two variances'
     /// sampling errors are about 1 % each), and must not see the misfit: with the common
     /// part ten times larger, the noise it reads (floor² × normaliser) is the same to
-    /// rounding, because the misfit cancels between a repetition and its mean.
+    /// rounding, because the misfit cancels between a repetition and its mean. A
+    /// direction whose mean holds a trial no repetition has is left out of the floor and
+    /// of the weighting between the axes alike (to rounding, 1e-12).
     #[test]
     fn the_noise_floor_is_the_averaged_units_noise_not_the_misfit() {
         use rand::SeedableRng;
@@ -2316,6 +2329,18 @@ mod tests {
         assert!(
             (with_unmatched - first_alone).abs() < 1e-12 * first_alone,
             "{with_unmatched} for {first_alone}"
+        );
+        // The weighting between the axes leaves it out alike: its repetitions' spread
+        // about a mean they do not make would hold a part of the misfit.
+        let weighting = |avgs: &[HandResponse]| {
+            Whitening::from_repetitions(&HandBaseline, avgs, &reps, 0, &beta, 0.06)
+                .expect("the first direction's repetitions are positive definite")
+                .axes
+        };
+        let (w_first, w_unmatched) = (weighting(&avgs[..1]), weighting(&unmatched));
+        assert!(
+            (w_unmatched - w_first).abs().max() < 1e-12 * w_first.abs().max(),
+            "W {w_unmatched} for {w_first}"
         );
     }
 
