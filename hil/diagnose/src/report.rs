@@ -54,6 +54,20 @@ fn sig(v: f64) -> String {
 /// The ranking table printed by `rigtwin diagnose`.
 /// The masses and the nuisances' parameters of a nominal fit (`Diagnosis::baseline`
 /// or `model`), in the fit's axes: "moving mass x 3.196 kg, offset x 1.52 N".
+/// What a balance's baseline at held-out NRMSE `b` over a noise floor `f` allows: no
+/// model gains more than `1 − f/b` on the session, since the floor is what none
+/// removes. Empty where the baseline is not above the floor.
+fn gain_bound(b: f64, f: f64) -> String {
+    if b > f && f > 0.0 {
+        format!(
+            ", so no model gains more than {:.0} % on this session",
+            100.0 * (1.0 - f / b)
+        )
+    } else {
+        String::new()
+    }
+}
+
 fn nominal_text(p: &std::collections::BTreeMap<String, f64>) -> String {
     let mut parts = Vec::new();
     for axis in ["x", "y"] {
@@ -107,8 +121,9 @@ pub fn table(d: &Diagnosis) -> String {
     if let (Some(b), Some(f)) = (d.cart_baseline_nrmse, d.cart_noise_floor_nrmse) {
         let _ = writeln!(
             out,
-            "cart noise floor  held-out NRMSE {f:.4} (the rig's noise under the named causes' model, from the rows where the carts stand still): the baseline is at {:.2}× it",
-            b / f
+            "cart noise floor  held-out NRMSE {f:.4} (the rig's noise under the named causes' model, from the rows where the carts stand still): the baseline is at {:.2}× it{}",
+            b / f,
+            gain_bound(b, f)
         );
     }
     if let Some(b) = d.hand_baseline_nrmse {
@@ -138,8 +153,9 @@ pub fn table(d: &Diagnosis) -> String {
         if let Some(f) = d.hand_noise_floor_nrmse {
             let _ = writeln!(
                 out,
-                "hand noise floor  held-out NRMSE {f:.4} (the responses' noise under the named causes' model, from the repetitions' spread about their mean): the baseline is at {:.2}× it",
-                b / f
+                "hand noise floor  held-out NRMSE {f:.4} (the responses' noise under the named causes' model, from the repetitions' spread about their mean): the baseline is at {:.2}× it{}",
+                b / f,
+                gain_bound(b, f)
             );
         }
     }
@@ -911,4 +927,22 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
     std::fs::write(&md_path, md).map_err(|e| werr(&md_path, e))?;
     written.insert(0, md_path);
     Ok(written)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::gain_bound;
+
+    /// The bound is `1 − f/b`: seed 1000's delay session (cart baseline 0.0454 over a
+    /// floor of 0.0289) allows 36 %; a baseline at or under its floor allows nothing
+    /// worth a line (the floor's own sampling error puts it there).
+    #[test]
+    fn the_gain_bound_is_one_minus_the_floor_over_the_baseline() {
+        assert_eq!(
+            gain_bound(0.0454, 0.0289),
+            ", so no model gains more than 36 % on this session"
+        );
+        assert_eq!(gain_bound(0.0802, 0.0811), "");
+        assert_eq!(gain_bound(0.05, 0.05), "");
+    }
 }
