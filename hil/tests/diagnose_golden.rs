@@ -25,11 +25,11 @@ const WANT: [(&str, &str); 4] = [
     ),
     (
         "example-nuisance",
-        "bbe513fff703447e06e77ad82a15ef7ff6fcbe4a3db4642dfe18383815c0da45",
+        "ed3ff3672a09f7ee1b0273ef0d864e5664ef3e02ffb2b4cd5817ba2c35d9434e",
     ),
     (
         "example-rotation-mass",
-        "2e0c08a36e5ef8d90d3f89975769e067447c1f11d36e2796888b896fe30925a9",
+        "66f81309cfdb14b5a13d674d44bfd59ff1c58ec8c3426b25ee43484bfe39ac56",
     ),
 ];
 

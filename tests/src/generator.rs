@@ -92,6 +92,33 @@ pub struct Hidden {
 }
 
 impl Hidden {
+    /// A rail friction of `coulomb_n` N and `viscous_n_s_per_m` on both rails, its knee
+    /// at 1 mm/s, and nothing else, for [`generate_hidden`]: frictions outside
+    /// [`draw`]'s range (a viscous friction without a Coulomb force).
+    #[must_use]
+    pub fn friction(coulomb_n: f64, viscous_n_s_per_m: f64) -> Hidden {
+        let name = EffectKind::RailFriction.name();
+        let p = BTreeMap::from([
+            ("coulomb_n".to_string(), coulomb_n),
+            ("viscous_n_s_per_m".to_string(), viscous_n_s_per_m),
+        ]);
+        Hidden {
+            effect: name.to_string(),
+            each: vec![(name.to_string(), p.clone())],
+            parameters: p,
+            effects: PlantEffects {
+                rail_friction: Some(RailFriction {
+                    coulomb_n,
+                    viscous_n_s_per_m,
+                    smooth_velocity_m_per_s: 1e-3,
+                }),
+                ..PlantEffects::default()
+            },
+            stretch_reflex: None,
+            feedback_delay_ms: None,
+        }
+    }
+
     /// A grip of `stiffness_n_per_m` with `damping_n_s_per_m` and nothing else, for
     /// [`generate_hidden`]: grips outside [`draw`]'s range.
     #[must_use]

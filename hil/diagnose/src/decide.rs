@@ -19,7 +19,9 @@
 //! ripple pitch at 5 or 100 mm, an angle at ±45°, a reflex delay at 10 or 50 ms, a grip
 //! at 0.5 or 50 kN/m, a friction knee at its softest 10 mm/s) says the law was pushed to
 //! fit something else; it is not named. A friction knee at the sharpest setting is the
-//! sign-function limit of the law, not an edge. A grip whose range (the stiffnesses the
+//! sign-function limit of the law, not an edge; nor is any knee of a friction whose
+//! Coulomb force is below the rig's 0.25 N (a viscous friction: the knee shapes
+//! nothing, and the folds put it anywhere). A grip whose range (the stiffnesses the
 //! folds cannot tell from the found one) reaches 50 kN/m is not told from a rigid grip
 //! ([`unbounded_grip`]).
 //!
@@ -213,14 +215,15 @@ pub fn immaterial(
     why
 }
 
-/// Why setting `s` of a candidate with `settings` settings is at the edge of its search
-/// range (empty when it is not).
+/// Why setting `s` of a candidate with `settings` settings, fitted to `params`, is at
+/// the edge of its search range (empty when it is not).
 #[must_use]
 pub fn at_edge(
     kind: Option<EffectKind>,
     setting: (&str, f64),
     s: usize,
     settings: usize,
+    params: &BTreeMap<String, f64>,
 ) -> Vec<String> {
     if settings < 2 {
         return Vec::new();
@@ -231,8 +234,13 @@ pub fn at_edge(
         kind,
         Some(EffectKind::RailFriction | EffectKind::ActuationDelay)
     );
+    // The knee shapes the Coulomb force alone: beside a Coulomb force the rig does not
+    // resolve, a viscous friction puts the knee anywhere, its softest setting included,
+    // and nothing was pushed there.
+    let knee_shapes_nothing =
+        kind == Some(EffectKind::RailFriction) && p(params, "coulomb_n").abs() < FORCE_RESOLUTION_N;
     let first = s == 0 && !open_below;
-    let last = s + 1 == settings;
+    let last = s + 1 == settings && !knee_shapes_nothing;
     if first || last {
         vec![format!(
             "at the edge of its search range: {} {:.4} is the {} setting",
@@ -386,6 +394,44 @@ pub fn evidence_r2(
 mod tests {
     use super::*;
     use crate::candidate::gain_bounds;
+
+    /// A friction at its softest knee (the last of 35) is at the edge while its Coulomb
+    /// force is one the rig resolves (0.3 N), and not when it is not (a viscous
+    /// friction of 5 N s/m beside 1 mN of Coulomb force: the knee shapes nothing); the
+    /// sharpest knee is never an edge, and a reflex delay at either end always is.
+    #[test]
+    fn a_soft_knee_is_an_edge_only_beside_a_coulomb_force() {
+        let friction = |fc: f64| {
+            BTreeMap::from([
+                ("coulomb_n".to_string(), fc),
+                ("viscous_n_s_per_m".to_string(), 5.0),
+            ])
+        };
+        let knee = |s: usize, fc: f64| {
+            at_edge(
+                Some(EffectKind::RailFriction),
+                ("smooth_velocity_m_per_s", 0.01),
+                s,
+                35,
+                &friction(fc),
+            )
+        };
+        assert_eq!(knee(34, 0.3).len(), 1);
+        assert!(knee(34, -0.001).is_empty());
+        assert!(knee(34, 0.2).is_empty());
+        assert!(knee(0, 0.3).is_empty());
+        let reflex = |s: usize| {
+            at_edge(
+                Some(EffectKind::StretchReflex),
+                ("delay_ms", 10.0),
+                s,
+                41,
+                &friction(0.0),
+            )
+        };
+        assert_eq!(reflex(0).len(), 1);
+        assert_eq!(reflex(40).len(), 1);
+    }
 
     /// The masses, one own column, then the two gains: only a gain at ±10 % is the
     /// bound (within a part in 10⁹ of the bound's width, as the box solver returns it),

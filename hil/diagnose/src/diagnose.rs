@@ -722,7 +722,7 @@ impl Judge<'_> {
         let s = fit.setting;
         let mut rejected = immaterial(c.kind(), &parameters, self.scale, lat * 1e3);
         let (at, of) = c.search_position(s);
-        rejected.extend(at_edge(c.kind(), c.setting(s), at, of));
+        rejected.extend(at_edge(c.kind(), c.setting(s), at, of, &parameters));
         let mut significant = t > self.t_critical && gain >= self.min_gain;
         // A fit at the motor gains' bound must stand without them.
         let bound = at_gain_bound(&fit.beta, &fit.gram.bounds);
@@ -2091,7 +2091,13 @@ impl HandJudge<'_> {
             }
         }
         let (at, of) = c.search_position(fit.setting);
-        rejected.extend(at_edge(c.kind(), c.setting(fit.setting), at, of));
+        rejected.extend(at_edge(
+            c.kind(),
+            c.setting(fit.setting),
+            at,
+            of,
+            &parameters,
+        ));
         rejected.extend(unbounded_grip(&parameter_range));
         Ranked {
             name: c.name().to_string(),

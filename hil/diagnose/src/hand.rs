@@ -2378,7 +2378,8 @@ mod tests {
         assert_eq!(grip.setting(last_k_mid_tau).1, 50_000.0);
         let edge = |s: usize| {
             let (at, of) = grip.search_position(s);
-            !crate::decide::at_edge(grip.kind(), grip.setting(s), at, of).is_empty()
+            !crate::decide::at_edge(grip.kind(), grip.setting(s), at, of, &Default::default())
+                .is_empty()
         };
         assert!(edge(last_k_mid_tau));
         assert!(edge(times / 2), "0.5 kN/m");
