@@ -411,19 +411,7 @@ fn a_soft_heavily_damped_grip_is_sized() {
 #[test]
 fn a_viscous_friction_without_a_coulomb_force_is_named() {
     let b = 2.0;
-    let tmp = tempfile::tempdir().unwrap();
-    let g = generate_hidden(
-        Hidden::friction(0.0, b),
-        4,
-        &Design::SHARED,
-        &tmp.path().join("out"),
-    )
-    .unwrap();
-    let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
-    let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
-    assert_eq!(names, ["rail-friction"], "{:?}", d.ranking);
+    let d = named_alone(Hidden::friction(0.0, b), 4);
     let c = &d.causes[0];
     let (found_b, found_fc) = (c.parameters["viscous_n_s_per_m"], c.parameters["coulomb_n"]);
     println!(
@@ -438,23 +426,25 @@ fn a_viscous_friction_without_a_coulomb_force_is_named() {
     assert!(d.unexplained.is_none(), "{:?}", d.unexplained);
 }
 
-/// Diagnoses a shared-layout session (seed `seed`) hiding a grip of `k` N/m and `b`
-/// N s/m alone and asserts: the grip alone is named, its stiffness within 20 %, a
-/// held-out gain of 50 %, nothing unexplained. Returns its stiffness and damping.
-fn a_grip_alone_is_sized(k: f64, b: f64, seed: u64) -> (f64, f64) {
+/// Diagnoses a shared-layout session (seed `seed`) hiding `hidden`, one catalog
+/// effect, and asserts that it alone is named.
+fn named_alone(hidden: Hidden, seed: u64) -> Diagnosis {
+    let name = hidden.effect.clone();
     let tmp = tempfile::tempdir().unwrap();
-    let g = generate_hidden(
-        Hidden::grip(k, b),
-        seed,
-        &Design::SHARED,
-        &tmp.path().join("out"),
-    )
-    .unwrap();
+    let g = generate_hidden(hidden, seed, &Design::SHARED, &tmp.path().join("out")).unwrap();
     let d = diagnose(&Session::read(&g.dir).unwrap(), &DiagnoseOptions::default())
         .unwrap()
         .diagnosis;
     let names: Vec<&str> = d.causes.iter().map(|c| c.name.name()).collect();
-    assert_eq!(names, ["grip-compliance"], "{:?}", d.ranking);
+    assert_eq!(names, [name.as_str()], "{:?}", d.ranking);
+    d
+}
+
+/// Diagnoses a shared-layout session (seed `seed`) hiding a grip of `k` N/m and `b`
+/// N s/m alone and asserts: the grip alone is named, its stiffness within 20 %, a
+/// held-out gain of 50 %, nothing unexplained. Returns its stiffness and damping.
+fn a_grip_alone_is_sized(k: f64, b: f64, seed: u64) -> (f64, f64) {
+    let d = named_alone(Hidden::grip(k, b), seed);
     let c = &d.causes[0];
     let (found_k, found_b) = (
         c.parameters["stiffness_n_per_m"],
