@@ -97,16 +97,13 @@ impl Hidden {
     /// [`draw`]'s range (a viscous friction without a Coulomb force).
     #[must_use]
     pub fn friction(coulomb_n: f64, viscous_n_s_per_m: f64) -> Hidden {
-        let name = EffectKind::RailFriction.name();
-        let p = BTreeMap::from([
-            ("coulomb_n".to_string(), coulomb_n),
-            ("viscous_n_s_per_m".to_string(), viscous_n_s_per_m),
-        ]);
-        Hidden {
-            effect: name.to_string(),
-            each: vec![(name.to_string(), p.clone())],
-            parameters: p,
-            effects: PlantEffects {
+        Hidden::plant_alone(
+            EffectKind::RailFriction,
+            &[
+                ("coulomb_n", coulomb_n),
+                ("viscous_n_s_per_m", viscous_n_s_per_m),
+            ],
+            PlantEffects {
                 rail_friction: Some(RailFriction {
                     coulomb_n,
                     viscous_n_s_per_m,
@@ -114,28 +111,39 @@ impl Hidden {
                 }),
                 ..PlantEffects::default()
             },
-            stretch_reflex: None,
-            feedback_delay_ms: None,
-        }
+        )
     }
 
     /// A grip of `stiffness_n_per_m` with `damping_n_s_per_m` and nothing else, for
     /// [`generate_hidden`]: grips outside [`draw`]'s range.
     #[must_use]
     pub fn grip(stiffness_n_per_m: f64, damping_n_s_per_m: f64) -> Hidden {
-        let name = EffectKind::GripCompliance.name();
-        let p = BTreeMap::from([("stiffness_n_per_m".to_string(), stiffness_n_per_m)]);
-        Hidden {
-            effect: name.to_string(),
-            each: vec![(name.to_string(), p.clone())],
-            parameters: p,
-            effects: PlantEffects {
+        Hidden::plant_alone(
+            EffectKind::GripCompliance,
+            &[("stiffness_n_per_m", stiffness_n_per_m)],
+            PlantEffects {
                 grip_compliance: Some(GripCompliance {
                     stiffness_n_per_m,
                     damping_n_s_per_m,
                 }),
                 ..PlantEffects::default()
             },
+        )
+    }
+
+    /// The catalog effect `kind` alone, simulated by `effects`, with `parameters` to
+    /// recover.
+    fn plant_alone(kind: EffectKind, parameters: &[(&str, f64)], effects: PlantEffects) -> Hidden {
+        let name = kind.name();
+        let p: BTreeMap<String, f64> = parameters
+            .iter()
+            .map(|(k, v)| ((*k).to_string(), *v))
+            .collect();
+        Hidden {
+            effect: name.to_string(),
+            each: vec![(name.to_string(), p.clone())],
+            parameters: p,
+            effects,
             stretch_reflex: None,
             feedback_delay_ms: None,
         }

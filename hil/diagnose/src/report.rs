@@ -51,9 +51,6 @@ fn sig(v: f64) -> String {
     }
 }
 
-/// The ranking table printed by `rigtwin diagnose`.
-/// The masses and the nuisances' parameters of a nominal fit (`Diagnosis::baseline`
-/// or `model`), in the fit's axes: "moving mass x 3.196 kg, offset x 1.52 N".
 /// What a balance's baseline at held-out NRMSE `b` over a noise floor `f` allows: no
 /// model gains more than `1 − f/b` on the session, since the floor is what none
 /// removes. Empty where the baseline is not above the floor.
@@ -68,6 +65,8 @@ fn gain_bound(b: f64, f: f64) -> String {
     }
 }
 
+/// The masses and the nuisances' parameters of a nominal fit (`Diagnosis::baseline`
+/// or `model`), in the fit's axes: "moving mass x 3.196 kg, offset x 1.52 N".
 fn nominal_text(p: &std::collections::BTreeMap<String, f64>) -> String {
     let mut parts = Vec::new();
     for axis in ["x", "y"] {
@@ -84,6 +83,7 @@ fn nominal_text(p: &std::collections::BTreeMap<String, f64>) -> String {
     parts.join(", ")
 }
 
+/// The ranking table printed by `rigtwin diagnose`.
 #[must_use]
 pub fn table(d: &Diagnosis) -> String {
     let mut out = String::new();
