@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "b5a49a28e42ae8e228d9d00c420bb862bc12a66862d42cf556d1569dd874446b",
+        "7b891a842f698f82ba7e299daa338581b79c63ff5fe1707f7d43c038b532513b",
     ),
     (
         "example-friction",
-        "ce43962203f3908e2c4bf5181e291a1c35557a77279954c1914031dc55623dfc",
+        "5d73db1e1a6fb106adf5755395dec817aac1fc51779390bd678177afdb0c24bd",
     ),
     (
         "example-nuisance",
-        "ed3ff3672a09f7ee1b0273ef0d864e5664ef3e02ffb2b4cd5817ba2c35d9434e",
+        "25177531b93793ce40f53c14c759928b8987b1bde07a5393ffd801564d252b10",
     ),
     (
         "example-rotation-mass",
-        "66f81309cfdb14b5a13d674d44bfd59ff1c58ec8c3426b25ee43484bfe39ac56",
+        "918ef23fce7d42b6d6042f7b036a01777d59a052bf85ce25c6065ad3d5757adb",
     ),
 ];
 

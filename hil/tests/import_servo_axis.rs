@@ -127,6 +127,15 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
     within("pitch", cause("force-ripple", "pitch_m"), 0.032, 0.02);
     within("delay", cause("actuation-delay", "delay_ms"), 1.5, 0.34);
     assert!(d["unexplained"].is_null(), "{}", d["unexplained"]);
+    // Its command's one-sample spikes (31, the PID's derivative kicks from single
+    // encoder counts) are forces the motor made, not glitches: the command is not
+    // searched, and the measured channels have none.
+    assert_eq!(
+        d["glitches"].as_array().unwrap().len(),
+        0,
+        "{}",
+        d["glitches"]
+    );
     // The written model carries every cause, the cogging on x alone, and the masses
     // fitted with the causes (none on the absent y axis).
     let m = rigtwin_diagnose::ExtendedModel::read(&model_file).unwrap();

@@ -43,9 +43,15 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
     run_design(effect, seed, &Design::SHARED)
 }
 
+/// Generates and diagnoses a session, and asserts that no sample of it was taken for
+/// a glitch (`rigtwin_diagnose::glitch`): the rig's physics, its sensor noise and
+/// encoder quantum, block means and every nuisance, at every layout and rate these
+/// tests use, never give one sample a glitch's signature.
 fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis) {
     let tmp = tempfile::tempdir().unwrap();
-    generate_and_diagnose(effect, seed, design, &tmp.path().join("out")).unwrap()
+    let (g, d) = generate_and_diagnose(effect, seed, design, &tmp.path().join("out")).unwrap();
+    assert!(d.glitches.is_empty(), "{:?}", d.glitches);
+    (g, d)
 }
 
 /// The first named cause removes at least `at_least` of what the baseline leaves above

@@ -77,6 +77,7 @@ use super::delay::ActuationDelay;
 use super::effect::{Effect, EffectKind};
 use super::error::DiscrepancyError;
 use super::friction::{RailFriction, with_fast_part};
+use super::glitch::{self, Glitch};
 use super::gram::Gram;
 use super::hand::{
     ARM_INERTIA_TOLERANCE, HandCandidate, HandJudgement, ReplicateTest, StretchReflex, SubjectArm,
@@ -417,6 +418,10 @@ pub struct Diagnosis {
     pub threshold: Option<Threshold>,
     /// Effects not judged, with the reason.
     pub not_judged: Vec<NotJudged>,
+    /// Samples that no physics made (one-sample spikes, `super::glitch`), bridged by
+    /// their neighbours' midpoint before the fits; the files are unchanged. Empty for
+    /// a clean log.
+    pub glitches: Vec<Glitch>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
 }
@@ -1393,6 +1398,8 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
+    let (bridged, glitches) = glitch::bridge(session);
+    let session = bridged.as_ref().unwrap_or(session);
     let rate = session.manifest.rate_hz;
     let signals: Vec<BalanceSignals> = session
         .iter()
@@ -1448,6 +1455,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         runner_up: None,
         threshold: None,
         not_judged: Vec::new(),
+        glitches: Vec::new(),
         evidence: Vec::new(),
     };
     let plant_ok = signals.len() >= MIN_TRIALS;
@@ -1497,6 +1505,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         );
     }
     d.not_judged = not_judged;
+    if !glitches.is_empty() {
+        d.evidence.push(glitch_evidence(&glitches));
+    }
+    d.glitches = glitches;
     // The cart balance's fits move into the analysis (nothing of it is cloned).
     let (latency_s, baseline, folds, fits) = match cart {
         Some(c) => (
@@ -1516,6 +1528,38 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         fits,
         hand: hand.judgement,
     })
+}
+
+/// The evidence sentence for the bridged glitches: how many, and the first few with
+/// file, channel, time and size.
+fn glitch_evidence(glitches: &[Glitch]) -> String {
+    const SHOWN: usize = 5;
+    let each: Vec<String> = glitches
+        .iter()
+        .take(SHOWN)
+        .map(|g| {
+            format!(
+                "{} {} at {:.4} s ({:+.4e} {} from its neighbours)",
+                g.file,
+                g.channel,
+                g.t_s,
+                g.recorded - g.bridged,
+                glitch::unit_of(g.channel)
+            )
+        })
+        .collect();
+    let more = glitches.len().saturating_sub(SHOWN);
+    format!(
+        "{} one-sample glitch(es) bridged by their neighbours' midpoint before the fits \
+         (the files are unchanged): {}{}",
+        glitches.len(),
+        each.join("; "),
+        if more > 0 {
+            format!("; and {more} more (`glitches` in --json)")
+        } else {
+            String::new()
+        }
+    )
 }
 
 /// The signals with their fast velocities ([`BalanceSignals::with_fast_velocity`]),

@@ -92,6 +92,16 @@ pub fn table(d: &Diagnosis) -> String {
         "session {}  ({} of {} trials with motor command, {} Hz, {} folds)",
         d.session, d.trials_used, d.trials_total, d.rate_hz, d.folds
     );
+    if let Some(g) = d.glitches.first() {
+        let _ = writeln!(
+            out,
+            "glitches  {} one-sample spike(s) bridged by their neighbours before the fits, the first {} {} at {:.4} s (all in the evidence and `glitches` of --json)",
+            d.glitches.len(),
+            g.file,
+            g.channel,
+            g.t_s
+        );
+    }
     if let (Some(b), false) = (
         d.cart_baseline_nrmse,
         d.baseline.contains_key("moving_mass_x_kg") && d.baseline.contains_key("moving_mass_y_kg"),
