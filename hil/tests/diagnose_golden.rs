@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "7b891a842f698f82ba7e299daa338581b79c63ff5fe1707f7d43c038b532513b",
+        "3e829d21220d5b16d624582f60ee350d12fbb7cd6c878fc55dfa6f70c52b42c6",
     ),
     (
         "example-friction",
-        "5d73db1e1a6fb106adf5755395dec817aac1fc51779390bd678177afdb0c24bd",
+        "d0b31b76fc211d0c51939c12f9ab70ec38b49ab8794332cc97c99c545b6f5ec6",
     ),
     (
         "example-nuisance",
-        "25177531b93793ce40f53c14c759928b8987b1bde07a5393ffd801564d252b10",
+        "6b3d6f1984e80240892578addf13107617d93cb5b3abf912f56b565cb86996d1",
     ),
     (
         "example-rotation-mass",
-        "918ef23fce7d42b6d6042f7b036a01777d59a052bf85ce25c6065ad3d5757adb",
+        "698bd68689c72cdf225962e031c5d1d8bfadc3a9a720e9f182fb01677cc4441e",
     ),
 ];
 

@@ -278,6 +278,37 @@ pub fn still_noise_floor(
     Ok(Some((still_ss / still as f64 * all as f64 / norm).sqrt()))
 }
 
+/// A unit's residual: its mean square per evaluated row, and its sum of squares over
+/// its command's; `None` for a unit without rows or command.
+pub type UnitResidual = Option<(f64, f64)>;
+
+/// Each unit's residual under the fit `beta` of `c` at setting `s` (fitted on every
+/// unit): its mean square per evaluated row and its sum of squares over its
+/// normaliser's (the command's), over the present axes; `None` for a unit without
+/// rows or command. The measures of `diagnose::faults`.
+pub fn unit_residuals(
+    c: &(impl Designed + ?Sized),
+    s: usize,
+    beta: &[f64],
+    signals: &[BalanceSignals],
+    latency_s: f64,
+) -> Result<Vec<UnitResidual>, DiscrepancyError> {
+    signals
+        .iter()
+        .map(|sig| {
+            let design = c.design(sig, s, latency_s)?;
+            let e = design.residual(sig, beta);
+            let (mut ss, mut rows, mut norm) = (0.0, 0usize, 0.0);
+            for axis in (0..2).filter(|a| sig.present(*a)) {
+                ss += e[axis].iter().map(|x| x * x).sum::<f64>();
+                rows += e[axis].len();
+                norm += design.norm[axis].iter().map(|x| x * x).sum::<f64>();
+            }
+            Ok((rows > 0 && norm > 0.0).then(|| (ss / rows as f64, ss / norm)))
+        })
+        .collect()
+}
+
 /// The nominal balance's target `u(t − latency) + F` on the evaluated rows of `axis`,
 /// and the normaliser `u` there (one axis of `Design::nominal`).
 #[must_use]

@@ -67,7 +67,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::bands::{BANDS_HZ, band_power};
-use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS, still_noise_floor};
+use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS, UnitResidual, still_noise_floor};
 use super::crossval::{CvFit, Folds, cross_validate};
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
@@ -208,6 +208,20 @@ pub struct NotJudged {
     pub effect: EffectKind,
     /// Why.
     pub reason: String,
+}
+
+/// A unit of the cart balance (a trial, or a block of a long one) set aside, and the
+/// balance judged again without it: under the model of the named causes fitted on
+/// every unit its residual is [`FAULT_RATIO`] times the median unit's or more, per row
+/// and per unit of command alike ([`faults`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SetAside {
+    /// The trial's id.
+    pub trial: u32,
+    /// Its residual's mean square per row, over the median unit's.
+    pub per_row: f64,
+    /// Its residual's sum of squares over its command's, over the median unit's.
+    pub per_command: f64,
 }
 
 /// One named cause.
@@ -418,6 +432,11 @@ pub struct Diagnosis {
     pub threshold: Option<Threshold>,
     /// Effects not judged, with the reason.
     pub not_judged: Vec<NotJudged>,
+    /// Units of the cart balance set aside as faults before it was judged (a motor or
+    /// amplifier that did not do what was logged, a snag, a collision), with their
+    /// residuals against the median unit's ([`faults`]); the hand balance keeps
+    /// them. Empty for a session whose units agree.
+    pub cart_set_aside: Vec<SetAside>,
     /// Samples that no physics made (one-sample spikes, `super::glitch`), bridged by
     /// their neighbours' midpoint before the fits; the files are unchanged. Empty for
     /// a clean log.
@@ -1400,6 +1419,41 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
     let (bridged, glitches) = glitch::bridge(session);
     let session = bridged.as_ref().unwrap_or(session);
+    let (mut a, residuals) = diagnose_units(session, opts, &[])?;
+    let faults = faults(&residuals);
+    if !faults.is_empty() {
+        // Judged again without them; the hand balance is judged as before.
+        let exclude: Vec<usize> = faults.iter().map(|f| f.0).collect();
+        let set_aside: Vec<SetAside> = faults
+            .iter()
+            .map(|&(i, per_row, per_command)| SetAside {
+                trial: a.signals[i].id,
+                per_row,
+                per_command,
+            })
+            .collect();
+        a = diagnose_units(session, opts, &exclude)?.0;
+        let d = &mut a.diagnosis;
+        d.evidence
+            .push(set_aside_evidence(&set_aside, residuals.len()));
+        d.cart_set_aside = set_aside;
+    }
+    let d = &mut a.diagnosis;
+    if !glitches.is_empty() {
+        d.evidence.push(glitch_evidence(&glitches));
+    }
+    d.glitches = glitches;
+    Ok(a)
+}
+
+/// [`diagnose`] on a session already bridged, the cart balance's units (trials, or
+/// blocks of a long log) at the indices `exclude` left out; with the analysis, each
+/// unit's residual under the cart model of the named causes ([`unit_residuals`]).
+fn diagnose_units(
+    session: &Session,
+    opts: &DiagnoseOptions,
+    exclude: &[usize],
+) -> Result<(Analysis, Vec<UnitResidual>), DiscrepancyError> {
     let rate = session.manifest.rate_hz;
     let signals: Vec<BalanceSignals> = session
         .iter()
@@ -1419,6 +1473,12 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     } else {
         signals
     };
+    let signals: Vec<BalanceSignals> = signals
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| !exclude.contains(i))
+        .map(|(_, s)| s)
+        .collect();
     let signals = with_fast_velocities(signals)?;
     let hand = judge_hand(session, opts.folds)?;
     let mut not_judged: Vec<NotJudged> = Vec::new();
@@ -1455,6 +1515,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         runner_up: None,
         threshold: None,
         not_judged: Vec::new(),
+        cart_set_aside: Vec::new(),
         glitches: Vec::new(),
         evidence: Vec::new(),
     };
@@ -1505,29 +1566,114 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         );
     }
     d.not_judged = not_judged;
-    if !glitches.is_empty() {
-        d.evidence.push(glitch_evidence(&glitches));
-    }
-    d.glitches = glitches;
     // The cart balance's fits move into the analysis (nothing of it is cloned).
-    let (latency_s, baseline, folds, fits) = match cart {
+    let (latency_s, baseline, folds, fits, residuals) = match cart {
         Some(c) => (
             c.latency_s,
             Some(c.baseline),
             Some(c.folds),
             c.ranked.into_iter().map(|(_, f)| f).collect(),
+            c.unit_residuals,
         ),
-        None => (0.0, None, None, Vec::new()),
+        None => (0.0, None, None, Vec::new(), Vec::new()),
     };
-    Ok(Analysis {
-        diagnosis: d,
-        signals,
-        latency_s,
-        baseline,
-        folds,
-        fits,
-        hand: hand.judgement,
-    })
+    Ok((
+        Analysis {
+            diagnosis: d,
+            signals,
+            latency_s,
+            baseline,
+            folds,
+            fits,
+            hand: hand.judgement,
+        },
+        residuals,
+    ))
+}
+
+/// A unit's residual, against the median unit's, at or above which it is a fault
+/// ([`faults`]). On 70 sessions (64 generated realistic ones hiding nothing, a delay,
+/// a friction, a grip, a handle mass or a reflex; the independent rig's four; the
+/// project's two examples) no unit reached 1.4 on both measures under the model of
+/// the named causes (1.44 per row alone, 5.1 per unit of command alone); a trial whose
+/// logged command the motors did not follow for its second half reached 58–139 on
+/// both on generated sessions and 122 on `example-ripple`
+/// (`hil/docs/notes/2026-12-06-glitches.md`).
+pub const FAULT_RATIO: f64 = 10.0;
+
+/// At most this share of the units is set aside: where more disagree, the session is
+/// not one population (holds beside reaches, two loads) rather than faulty, and every
+/// unit is kept.
+pub const MAX_SET_ASIDE_SHARE: f64 = 0.1;
+
+/// The units of the cart balance that are faults, from each unit's residual under
+/// the model of the named causes fitted on every unit (`per_unit[i]`: its mean square
+/// per row, and its sum of squares over its command's; `None` for a unit without
+/// rows or command), as `(index, per row, per unit of command)`, each over the
+/// median unit's.
+///
+/// A unit at [`FAULT_RATIO`] or more on both is a fault, unless that leaves fewer
+/// than `MIN_TRIALS` (4) units or makes more than [`MAX_SET_ASIDE_SHARE`] of them faults
+/// (then none is). Both measures, because a unit of holding has a small residual per
+/// row and a large one per newton of command, and a brisk reach the other way round;
+/// a fault (a command the motor did not follow) is large on both. Under the named
+/// causes' model, because a large effect the baseline lacks (a 1.8 N cogging) leaves
+/// a residual in every unit that a fault's hides in.
+///
+/// A catalog effect acts on every unit by its law, so it moves a unit's residual
+/// against the others' by a few times at most (on the sessions of [`FAULT_RATIO`]),
+/// never by ten on both measures.
+#[must_use]
+pub fn faults(per_unit: &[UnitResidual]) -> Vec<(usize, f64, f64)> {
+    if per_unit.len() < MIN_TRIALS {
+        return Vec::new();
+    }
+    let median = |pick: fn(&(f64, f64)) -> f64| {
+        let mut v: Vec<f64> = per_unit.iter().flatten().map(pick).collect();
+        if v.is_empty() {
+            return None;
+        }
+        let mid = v.len() / 2;
+        let m = *v.select_nth_unstable_by(mid, f64::total_cmp).1;
+        (m > 0.0).then_some(m)
+    };
+    let (Some(row_median), Some(command_median)) = (median(|r| r.0), median(|r| r.1)) else {
+        return Vec::new();
+    };
+    let found: Vec<(usize, f64, f64)> = per_unit
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let (row, command) = (*r)?;
+            let (row, command) = (row / row_median, command / command_median);
+            (row >= FAULT_RATIO && command >= FAULT_RATIO).then_some((i, row, command))
+        })
+        .collect();
+    let too_many = found.len() as f64 > MAX_SET_ASIDE_SHARE * per_unit.len() as f64;
+    if too_many || per_unit.len() - found.len() < MIN_TRIALS {
+        return Vec::new();
+    }
+    found
+}
+
+/// The evidence sentence for the units set aside from the cart balance.
+fn set_aside_evidence(set_aside: &[SetAside], units: usize) -> String {
+    let each: Vec<String> = set_aside
+        .iter()
+        .map(|a| {
+            format!(
+                "trial {} ({:.0}× the median unit's residual per row, {:.0}× per unit of command)",
+                a.trial, a.per_row, a.per_command
+            )
+        })
+        .collect();
+    format!(
+        "{} of the cart balance's {units} units set aside as faults, and the balance judged \
+         again without them: {}. The cart model cannot hold there (a motor or amplifier not \
+         doing what was logged, a snag, a collision); the hand balance keeps them",
+        set_aside.len(),
+        each.join("; ")
+    )
 }
 
 /// The evidence sentence for the bridged glitches: how many, and the first few with
@@ -1675,6 +1821,8 @@ struct CartJudgement {
     /// What the named causes' settings say that their parameters do not (for the
     /// evidence).
     notes: Vec<String>,
+    /// Each unit's residual under the model of the named causes (for [`faults`]).
+    unit_residuals: Vec<UnitResidual>,
 }
 
 /// The cart balance: the nominal latency and baseline, every plant-side candidate's
@@ -1789,8 +1937,13 @@ fn judge_cart(
         })
         .collect();
     // The model of the named causes (the baseline without), and the noise floor under it.
+    // The model of the named causes (the baseline without), the noise floor and each
+    // unit's residual under it.
+    let unit_residuals;
     (d.model, d.cart_noise_floor_nrmse) = if members.is_empty() {
         let floor = still_noise_floor(&Baseline, 0, &baseline.beta, signals, latency_s)?;
+        unit_residuals =
+            super::candidate::unit_residuals(&Baseline, 0, &baseline.beta, signals, latency_s)?;
         (d.baseline.clone(), floor)
     } else {
         let joint = Joint::given(members);
@@ -1798,6 +1951,8 @@ fn judge_cart(
         let mut m = nominal_parameters(&fit.beta, signals);
         m.insert("latency_ms".to_string(), latency_s * 1e3);
         let floor = still_noise_floor(&joint, fit.setting, &fit.beta, signals, latency_s)?;
+        unit_residuals =
+            super::candidate::unit_residuals(&joint, fit.setting, &fit.beta, signals, latency_s)?;
         (m, floor)
     };
     if let Some(f) = d.cart_noise_floor_nrmse {
@@ -1815,6 +1970,7 @@ fn judge_cart(
         df,
         t_critical,
         notes,
+        unit_residuals,
     })
 }
 
@@ -2894,6 +3050,46 @@ fn evidence(
 mod tests {
     use super::*;
     use crate::crossval::FoldFit;
+
+    /// 32 units whose residuals spread as a session's do (0.6–1.5 of the median on
+    /// each measure, alternating) and `extra` at the given indices.
+    fn units(extra: &[(usize, (f64, f64))]) -> Vec<UnitResidual> {
+        (0..32)
+            .map(|i| {
+                extra.iter().find(|(j, _)| *j == i).map_or_else(
+                    || {
+                        let x = 0.6 + 0.9 * f64::from(u32::try_from(i).unwrap() % 5) / 4.0;
+                        Some((x, 2.1 - x))
+                    },
+                    |(_, r)| Some(*r),
+                )
+            })
+            .collect()
+    }
+
+    /// A unit ten times the median on both measures is a fault; ten times on one
+    /// alone (a hold's per-command residual, a brisk reach's per-row one) is not; more
+    /// than a tenth of the units, or too few left, and none is.
+    #[test]
+    fn a_fault_is_far_out_on_both_measures_and_rare() {
+        let found = faults(&units(&[(7, (12.0, 15.0))]));
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].0, 7);
+        // The median of the 32 (0.6–1.5, upper middle) is 1.05 on both.
+        assert!((found[0].1 - 12.0 / 1.05).abs() < 1e-9, "{found:?}");
+        assert!(faults(&units(&[(7, (12.0, 5.0))])).is_empty());
+        assert!(faults(&units(&[(7, (5.0, 12.0))])).is_empty());
+        // Three of 32 is under a tenth; four is over it.
+        let three: Vec<_> = [3, 9, 20].iter().map(|&i| (i, (20.0, 20.0))).collect();
+        assert_eq!(faults(&units(&three)).len(), 3);
+        let four: Vec<_> = [3, 9, 20, 27].iter().map(|&i| (i, (20.0, 20.0))).collect();
+        assert!(faults(&units(&four)).is_empty());
+        // A unit without command is no unit of the medians and no fault.
+        let mut u = units(&[(7, (12.0, 15.0))]);
+        u[8] = None;
+        assert_eq!(faults(&u).len(), 1);
+        assert!(faults(&u[..3]).is_empty());
+    }
 
     /// The searched range holds the value the parameters come from even where the
     /// test's folds tell it apart from their best: on five stiffnesses 10 % apart with

@@ -54,14 +54,15 @@ pub mod unexplained;
 
 pub use bands::{BANDS_HZ, BandError, CHANNELS, SEGMENT_S, band_errors, channels_of};
 pub use candidate::{
-    Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, Reshape, force_gains, gain_bounds,
-    masses, nominal_target, push_rows, residual_rows,
+    Baseline, Candidate, MOTOR_GAIN_TOLERANCE, NUISANCE_COLUMNS, Reshape, UnitResidual,
+    force_gains, gain_bounds, masses, nominal_target, push_rows, residual_rows,
 };
 pub use crossval::{CvFit, FoldFit, Folds, cross_validate};
 pub use delay::{ActuationDelay, MAX_DELAY_S, NOMINAL_LATENCY_MAX_S};
 pub use diagnose::{
-    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, FoundTerm, HUMAN_SIDE, NotJudged,
-    PLANT_SIDE, Ranked, Threshold, Unexplained, diagnose, nominal_parameters,
+    Analysis, CandidateFit, Cause, DiagnoseOptions, Diagnosis, FAULT_RATIO, FoundTerm, HUMAN_SIDE,
+    MAX_SET_ASIDE_SHARE, NotJudged, PLANT_SIDE, Ranked, SetAside, Threshold, Unexplained, diagnose,
+    faults, nominal_parameters,
 };
 pub use effect::{Effect, EffectKind, MissingParameter, Side, UnknownEffect};
 pub use error::DiscrepancyError;

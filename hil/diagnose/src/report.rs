@@ -92,6 +92,18 @@ pub fn table(d: &Diagnosis) -> String {
         "session {}  ({} of {} trials with motor command, {} Hz, {} folds)",
         d.session, d.trials_used, d.trials_total, d.rate_hz, d.folds
     );
+    if !d.cart_set_aside.is_empty() {
+        let ids: Vec<String> = d
+            .cart_set_aside
+            .iter()
+            .map(|a| a.trial.to_string())
+            .collect();
+        let _ = writeln!(
+            out,
+            "set aside  trial(s) {} from the cart balance as faults: the cart model cannot hold there, judged again without them (the evidence says how far)",
+            ids.join(", ")
+        );
+    }
     if let Some(g) = d.glitches.first() {
         let _ = writeln!(
             out,
