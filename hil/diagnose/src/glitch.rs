@@ -13,7 +13,9 @@
 //! `e_{i±1} = −s/2`, and leaves `e_{i±2}` alone. A glitch is a sample whose `e_i` is
 //! above the threshold below while both neighbours' are of the other sign and
 //! 0.25–0.75 of its size, and the samples two away carry less than a quarter of it.
-//! Motion the rig can make has none of this: an acceleration, however sharp, bends
+//! A stale sample (a logger repeating the previous frame) during motion at speed `v`
+//! has the same signature, of size `v·dt`, and its neighbours' midpoint is what was
+//! read. Motion the rig can make has none of this: an acceleration, however sharp, bends
 //! neighbouring samples the same way (`e_{i±1}` of the same sign as `e_i`); a step (a
 //! missed encoder count, a re-tare) gives `e` of opposite signs on two samples, not
 //! one between two halves; a ringing sensor alternates with ratios near 0 (at a
@@ -244,6 +246,12 @@ mod tests {
             x[300] += 2e-3;
             x[1400] -= 50e-6;
             assert_eq!(find(&x, 20e-6), vec![300, 1400], "seed {seed}");
+            // A stale sample (a logger repeating the previous frame) at the reach's
+            // peak speed, 0.78 m/s: `e = −v·dt`, its neighbours `+v·dt/2`, the same
+            // signature; its midpoint is what the encoder read.
+            let mut x = clean.clone();
+            x[300] = x[299];
+            assert_eq!(find(&x, 20e-6), vec![300], "seed {seed}");
         }
     }
 
