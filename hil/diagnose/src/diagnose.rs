@@ -58,6 +58,12 @@
 //! reflex on 150 ms pulses has a delay of 26 ± 2.7 ms whose range is 13.5–35.5 ms. The range
 //! speaks of the noise, not of a bias the model shares across folds.
 //!
+//! What a log holds that no model should fit: a sample no physics made (an encoder or
+//! sensor spike, a stale frame) is bridged by its neighbours before anything is fitted
+//! ([`super::glitch`]), and a cart-balance unit ten times the median unit's residual
+//! under the named causes' model on both of its measures (a trial the motors did not
+//! follow) is set aside and the cart balance judged again ([`faults`]).
+//!
 //! The experiments behind these choices: `hil/docs/notes/2026-12-03-decision-rule.md`.
 
 use std::collections::BTreeMap;
@@ -432,10 +438,10 @@ pub struct Diagnosis {
     pub threshold: Option<Threshold>,
     /// Effects not judged, with the reason.
     pub not_judged: Vec<NotJudged>,
-    /// Units of the cart balance set aside as faults before it was judged (a motor or
-    /// amplifier that did not do what was logged, a snag, a collision), with their
-    /// residuals against the median unit's ([`faults`]); the hand balance keeps
-    /// them. Empty for a session whose units agree.
+    /// Units of the cart balance set aside as faults, the balance judged again without
+    /// them (a motor or amplifier that did not do what was logged, a snag, a
+    /// collision), with their residuals against the median unit's ([`faults`]); the
+    /// hand balance keeps them. Empty for a session whose units agree.
     pub cart_set_aside: Vec<SetAside>,
     /// Samples that no physics made (one-sample spikes, `super::glitch`), bridged by
     /// their neighbours' midpoint before the fits; the files are unchanged. Empty for
@@ -1409,10 +1415,13 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 
 /// Diagnoses a session: see the module docs.
 ///
-/// The phases: the balance signals of every trial; the cart balance
+/// The phases: one-sample glitches in the measured channels bridged
+/// ([`glitch::bridge`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
 /// balance (`rank_hand`, on the reading corrected by what the cart balance found about
-/// the sensor); the decision between the two balances (`decide`).
+/// the sensor); the decision between the two balances (`decide`). Then the cart
+/// balance's units far beyond the others under the named causes' model ([`faults`])
+/// are set aside and everything after the signals is judged again without them.
 ///
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
@@ -1448,7 +1457,8 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
 
 /// [`diagnose`] on a session already bridged, the cart balance's units (trials, or
 /// blocks of a long log) at the indices `exclude` left out; with the analysis, each
-/// unit's residual under the cart model of the named causes ([`unit_residuals`]).
+/// unit's residual under the cart model of the named causes
+/// (`candidate::unit_residuals`).
 fn diagnose_units(
     session: &Session,
     opts: &DiagnoseOptions,
