@@ -150,6 +150,12 @@ fn a_trial_the_motors_did_not_follow_is_set_aside() {
     );
     let a = &f.cart_set_aside[0];
     assert!(a.per_row >= 10.0 && a.per_command >= 10.0, "{a:?}");
+    // The whole trial but for the smoothing's half window (20 ms) at each end.
+    let end = clean.trials[index].end_s();
+    assert!(
+        a.span_s[0] < 0.05 && a.span_s[1] > end - 0.05,
+        "{a:?} in {end} s"
+    );
     assert!(f.evidence.iter().any(|e| e.contains("set aside")));
 
     let mut without = clean.clone();

@@ -224,6 +224,9 @@ pub struct NotJudged {
 pub struct SetAside {
     /// The trial's id.
     pub trial: u32,
+    /// The unit's evaluated span in its trial, s (the whole trial but for its edges,
+    /// or one block of a long log).
+    pub span_s: [f64; 2],
     /// Its residual's mean square per row, over the median unit's.
     pub per_row: f64,
     /// Its residual's sum of squares over its command's, over the median unit's.
@@ -1435,10 +1438,15 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         let exclude: Vec<usize> = faults.iter().map(|f| f.0).collect();
         let set_aside: Vec<SetAside> = faults
             .iter()
-            .map(|&(i, per_row, per_command)| SetAside {
-                trial: a.signals[i].id,
-                per_row,
-                per_command,
+            .map(|&(i, per_row, per_command)| {
+                let u = &a.signals[i];
+                let at = |row: Option<&usize>| row.map_or(0.0, |&r| r as f64 / u.rate_hz);
+                SetAside {
+                    trial: u.id,
+                    span_s: [at(u.rows.first()), at(u.rows.last())],
+                    per_row,
+                    per_command,
+                }
             })
             .collect();
         a = diagnose_units(session, opts, &exclude)?.0;
@@ -1613,7 +1621,8 @@ pub const FAULT_RATIO: f64 = 10.0;
 
 /// At most this share of the units is set aside: where more disagree, the session is
 /// not one population (holds beside reaches, two loads) rather than faulty, and every
-/// unit is kept.
+/// unit is kept. So a session of fewer than ten units (a long log cut into blocks,
+/// a short session) sets none aside.
 pub const MAX_SET_ASIDE_SHARE: f64 = 0.1;
 
 /// The units of the cart balance that are faults, from each unit's residual under
@@ -1672,8 +1681,8 @@ fn set_aside_evidence(set_aside: &[SetAside], units: usize) -> String {
         .iter()
         .map(|a| {
             format!(
-                "trial {} ({:.0}× the median unit's residual per row, {:.0}× per unit of command)",
-                a.trial, a.per_row, a.per_command
+                "trial {} at {:.2}–{:.2} s ({:.0}× the median unit's residual per row, {:.0}× per unit of command)",
+                a.trial, a.span_s[0], a.span_s[1], a.per_row, a.per_command
             )
         })
         .collect();
