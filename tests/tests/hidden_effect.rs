@@ -45,7 +45,7 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 
 /// Generates and diagnoses a session, and asserts that no sample of it was taken for
 /// a glitch (`rigtwin_diagnose::glitch`) and no trial for a fault
-/// (`rigtwin_diagnose::set_aside_faults`): the rig's physics, its sensor noise and
+/// (`rigtwin_diagnose::faults`): the rig's physics, its sensor noise and
 /// encoder quantum, block means, every nuisance and every hidden effect, at every
 /// layout and rate these tests use, make neither.
 fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis) {

@@ -95,7 +95,7 @@ use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
-use super::stats::{jackknife_se, mean_sd, student_t_critical};
+use super::stats::{jackknife_se, mean_sd, student_t_critical, upper_median};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
 use rigtwin_session::{Axes, Session};
@@ -1652,8 +1652,7 @@ pub fn faults(per_unit: &[UnitResidual]) -> Vec<(usize, f64, f64)> {
         if v.is_empty() {
             return None;
         }
-        let mid = v.len() / 2;
-        let m = *v.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let m = upper_median(&mut v);
         (m > 0.0).then_some(m)
     };
     let (Some(row_median), Some(command_median)) = (median(|r| r.0), median(|r| r.1)) else {

@@ -28,7 +28,7 @@
 //! - [`QUANTA`] times the channel's smallest recorded step (its quantum, or a
 //!   fraction of it for block means): a count of dither on a coarse encoder is not a
 //!   glitch;
-//! - the channel's physical floor ([`floor_of`]): 20 µm of position, 1 N of force,
+//! - the channel's physical floor ([`SEARCHED`]): 20 µm of position, 1 N of force,
 //!   20 mm/s of velocity, four times the rig's resolution and below any size that moves
 //!   a fit (a balance's error from a spike grows with its square: 20 µm is 10⁻⁴ of the
 //!   harm of 2 mm).
@@ -47,6 +47,8 @@
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
+
+use super::stats::upper_median;
 
 /// A glitch's departure from its neighbours' midpoint, in robust standard deviations
 /// of that departure in its trial, at least.
@@ -76,18 +78,17 @@ pub struct Glitch {
     pub bridged: f64,
 }
 
-/// The physical floor of a glitch on `channel`, in its unit (see the module docs), or
-/// `None` for a channel that is not searched (time, and what the controller computes
-/// rather than measures: the motor command and the perturbation).
-#[must_use]
-pub fn floor_of(channel: &str) -> Option<f64> {
-    match channel {
-        "x_m" | "y_m" => Some(20e-6),
-        "fx_n" | "fy_n" => Some(1.0),
-        "vx_m_per_s" | "vy_m_per_s" => Some(0.02),
-        _ => None,
-    }
-}
+/// The searched channels, each with the physical floor of a glitch on it in its unit
+/// (module docs): what a sensor measures. Not searched: time, and what the controller
+/// computes rather than measures (the motor command and the perturbation).
+pub const SEARCHED: [(&str, f64); 6] = [
+    ("x_m", 20e-6),
+    ("y_m", 20e-6),
+    ("fx_n", 1.0),
+    ("fy_n", 1.0),
+    ("vx_m_per_s", 0.02),
+    ("vy_m_per_s", 0.02),
+];
 
 /// The unit of a searched channel, as its name spells it (`m`, `N`, `m/s`).
 #[must_use]
@@ -139,15 +140,9 @@ pub fn find(x: &[f64], floor: f64) -> Vec<usize> {
 /// 1.4826 × the median absolute deviation of `e` from its median.
 fn robust_sigma(e: &[f64]) -> f64 {
     let mut v = e.to_vec();
-    let m = median(&mut v);
+    let m = upper_median(&mut v);
     let mut dev: Vec<f64> = e.iter().map(|x| (x - m).abs()).collect();
-    1.4826 * median(&mut dev)
-}
-
-/// The median of `v` (reordered), the upper one of an even count.
-fn median(v: &mut [f64]) -> f64 {
-    let mid = v.len() / 2;
-    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+    1.4826 * upper_median(&mut dev)
 }
 
 /// The smallest nonzero step between consecutive samples of `x` (0 when it never
@@ -161,53 +156,52 @@ fn smallest_step(x: &[f64]) -> f64 {
     if s.is_finite() { s } else { 0.0 }
 }
 
-/// The measured channels of `trial`, mutable, with their names.
-fn channels_mut(trial: &mut Trial) -> Vec<(&'static str, &mut Vec<f64>)> {
-    let mut out: Vec<(&'static str, &mut Vec<f64>)> = vec![
-        ("x_m", &mut trial.x_m),
-        ("y_m", &mut trial.y_m),
-        ("fx_n", &mut trial.fx_n),
-        ("fy_n", &mut trial.fy_n),
-    ];
-    for (name, col) in [
-        ("vx_m_per_s", trial.vx_m_per_s.as_mut()),
-        ("vy_m_per_s", trial.vy_m_per_s.as_mut()),
-    ] {
-        if let Some(c) = col {
-            out.push((name, c));
-        }
+/// The searched channel `name` of `trial`, mutable (`None` when the trial lacks it).
+fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mut Vec<f64>> {
+    match name {
+        "x_m" => Some(&mut trial.x_m),
+        "y_m" => Some(&mut trial.y_m),
+        "fx_n" => Some(&mut trial.fx_n),
+        "fy_n" => Some(&mut trial.fy_n),
+        "vx_m_per_s" => trial.vx_m_per_s.as_mut(),
+        "vy_m_per_s" => trial.vy_m_per_s.as_mut(),
+        _ => None,
     }
-    out
 }
 
 /// The session with every glitch bridged, and the glitches, in trial and row order;
-/// `None` in place of the session when it has none (the caller keeps its own).
+/// `None` in place of the session when it has none (the caller keeps its own, and no
+/// trial is copied).
 #[must_use]
 pub fn bridge(session: &Session) -> (Option<Session>, Vec<Glitch>) {
     let mut found = Vec::new();
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
-        let mut work = trial.clone();
-        let t_s = trial.t_s.clone();
-        let mut any = false;
-        for (channel, values) in channels_mut(&mut work) {
-            let floor = floor_of(channel).unwrap_or(f64::INFINITY);
-            for row in find(values, floor) {
-                let bridged = 0.5 * (values[row - 1] + values[row + 1]);
+        let first = found.len();
+        for (channel, floor) in SEARCHED {
+            let Some(x) = trial.column(channel) else {
+                continue;
+            };
+            // No two glitches are neighbours (each needs its neighbours' departures
+            // at half its own), so each bridge reads recorded values.
+            for row in find(x, floor) {
                 found.push(Glitch {
                     file: entry.file.clone(),
                     channel,
                     row,
-                    t_s: t_s[row],
-                    recorded: values[row],
-                    bridged,
+                    t_s: trial.t_s[row],
+                    recorded: x[row],
+                    bridged: 0.5 * (x[row - 1] + x[row + 1]),
                 });
-                values[row] = bridged;
-                any = true;
             }
         }
-        if any {
-            copy.get_or_insert_with(|| session.clone()).trials[index] = work;
+        if found.len() > first {
+            let work = &mut copy.get_or_insert_with(|| session.clone()).trials[index];
+            for g in &found[first..] {
+                if let Some(values) = channel_mut(work, g.channel) {
+                    values[g.row] = g.bridged;
+                }
+            }
         }
     }
     (copy, found)

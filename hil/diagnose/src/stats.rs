@@ -1,6 +1,7 @@
 //! The statistics behind "is this gain more than chance": Student's t distribution
 //! (through the regularised incomplete beta function, Numerical Recipes §6.4) and the
-//! delete-a-group jackknife for the spread of parameters over folds.
+//! delete-a-group jackknife for the spread of parameters over folds; the median that
+//! robust scales and the faulty-unit rule read.
 
 /// ln Γ(x) for x > 0 (Lanczos, g = 7, n = 9; relative error < 1e-14).
 fn ln_gamma(x: f64) -> f64 {
@@ -111,6 +112,14 @@ pub fn student_t_critical(alpha: f64, df: f64) -> f64 {
         }
     }
     0.5 * (lo + hi)
+}
+
+/// The median of `v` (reordered in place), the upper one of an even count; `v` must
+/// not be empty.
+#[must_use]
+pub fn upper_median(v: &mut [f64]) -> f64 {
+    let mid = v.len() / 2;
+    *v.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// Mean and sample standard deviation.
