@@ -49,13 +49,14 @@ fn example_ripple_is_found_and_its_model_round_trips() {
 }
 
 /// Six one-sample spikes no physics made, in three trials of the example (a 2 mm
-/// encoder read, a 40 N sensor conversion): they are found at their file, channel and
-/// row, bridged, and the findings are the clean session's. Left in, the same spikes
-/// take the ripple's held-out gain from 0.963 to 0.869 (its extended NRMSE 3.5×;
+/// encoder read, a 40 N sensor conversion), and two runs (2 mm on two encoder samples,
+/// 30 N on three sensor conversions): they are found at their file, channel, row and
+/// run length, bridged, and the findings are the clean session's. Left in, the six
+/// spikes take the ripple's held-out gain from 0.963 to 0.869 (its extended NRMSE 3.5×;
 /// measured with the diagnosis before it bridged them,
 /// `hil/docs/notes/2026-12-06-glitches.md`).
 #[test]
-fn one_sample_glitches_are_bridged_and_change_no_finding() {
+fn glitches_are_bridged_and_change_no_finding() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
     let clean = Session::read(&dir).unwrap();
     let c = diagnose(&clean, &DiagnoseOptions::default())
@@ -63,47 +64,79 @@ fn one_sample_glitches_are_bridged_and_change_no_finding() {
         .diagnosis;
     assert!(c.glitches.is_empty(), "{:?}", c.glitches);
 
-    let mut s = clean.clone();
-    let spikes: [(&str, usize, f64); 2] = [("y_m", 1500, 2e-3), ("fx_n", 900, 40.0)];
+    // (trial, channel, first row, run length, size).
+    let mut planted: Vec<(usize, &str, usize, usize, f64)> = Vec::new();
     for index in [2, 7, 12] {
+        planted.push((index, "y_m", 1500, 1, 2e-3));
+        planted.push((index, "fx_n", 900, 1, 40.0));
+    }
+    planted.push((4, "x_m", 2100, 2, 2e-3));
+    planted.push((9, "fy_n", 600, 3, 30.0));
+    // The diagnosis lists them by trial, then channel in the order searched, then row.
+    let order = ["x_m", "y_m", "fx_n", "fy_n"];
+    let rank = |c: &str| order.iter().position(|o| *o == c);
+    planted.sort_by_key(|p| (p.0, rank(p.1), p.2));
+    let mut s = clean.clone();
+    for &(index, channel, row, run, size) in &planted {
         let t = &mut s.trials[index];
-        t.y_m[spikes[0].1] += spikes[0].2;
-        t.fx_n[spikes[1].1] += spikes[1].2;
+        let x = match channel {
+            "x_m" => &mut t.x_m,
+            "y_m" => &mut t.y_m,
+            "fx_n" => &mut t.fx_n,
+            _ => &mut t.fy_n,
+        };
+        x[row..row + run].iter_mut().for_each(|v| *v += size);
     }
     let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
 
-    // Every spike, and nothing else, in trial and channel order. The recorded value's
-    // departure from the bridge is the spike plus the clean sample's own departure
-    // from its neighbours (the channel's noise and curvature), to rounding.
+    // Every planted sample, and nothing else, in trial, channel and row order. The
+    // recorded value's departure from the bridge is the planted size plus the clean
+    // sample's own departure from the line between the run's bounding samples (the
+    // channel's noise and curvature), to rounding.
     let mut want = Vec::new();
-    for index in [2, 7, 12] {
-        let t = &clean.trials[index];
-        for (channel, row, size) in spikes {
-            let x = t.column(channel).unwrap();
-            let own = x[row] - 0.5 * (x[row - 1] + x[row + 1]);
+    for &(index, channel, row, run, size) in &planted {
+        let x = clean.trials[index].column(channel).unwrap();
+        let (a, b) = (row - 1, row + run);
+        for k in row..b {
+            let line = x[a] + (x[b] - x[a]) * (k - a) as f64 / (run + 1) as f64;
             want.push((
                 s.manifest.trials[index].file.clone(),
                 channel,
-                row,
-                size + own,
+                k,
+                run,
+                size + x[k] - line,
             ));
         }
     }
     let got: Vec<_> = g
         .glitches
         .iter()
-        .map(|x| (x.file.clone(), x.channel, x.row, x.recorded - x.bridged))
+        .map(|x| {
+            (
+                x.file.clone(),
+                x.channel,
+                x.row,
+                x.run,
+                x.recorded - x.bridged,
+            )
+        })
         .collect();
     assert_eq!(got.len(), want.len(), "{got:?}");
-    for ((gf, gc, gr, gs), (wf, wc, wr, ws)) in got.iter().zip(&want) {
-        assert_eq!((gf, gc, gr), (wf, wc, wr));
+    for ((gf, gc, gr, gn, gs), (wf, wc, wr, wn, ws)) in got.iter().zip(&want) {
+        assert_eq!((gf, gc, gr, gn), (wf, wc, wr, wn));
         assert!((gs - ws).abs() < 1e-9 * ws.abs(), "{gc} {gs} against {ws}");
     }
-    assert!(g.evidence.iter().any(|e| e.contains("6 one-sample glitch")));
+    assert!(
+        g.evidence
+            .iter()
+            .any(|e| e.contains("11 glitched sample(s)")),
+        "{:?}",
+        g.evidence
+    );
 
     // The findings: the same cause, its parameters within 0.5 % and its gain within
-    // 0.002 (the bridge is the midpoint, not the recorded value, so the fits move by
-    // the curvature of six samples in 56 000).
+    // 0.002 (the bridge is the line, not the clean value, so the fits move by the
+    // curvature of eleven samples in 56 000).
     assert_eq!(g.cause, c.cause);
     for (k, v) in &c.parameters {
         let w = g.parameters[k];
@@ -118,6 +151,7 @@ fn one_sample_glitches_are_bridged_and_change_no_finding() {
         (ge - ce).abs() < 0.01 * ce,
         "extended NRMSE {ge} against {ce}"
     );
+    assert!(g.cart_set_aside.is_empty(), "{:?}", g.cart_set_aside);
 }
 
 /// A trial whose logged command the motors did not follow (trial 6's command zeroed

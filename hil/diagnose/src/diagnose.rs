@@ -446,8 +446,9 @@ pub struct Diagnosis {
     /// collision), with their residuals against the median unit's ([`faults`]); the
     /// hand balance keeps them. Empty for a session whose units agree.
     pub cart_set_aside: Vec<SetAside>,
-    /// Samples that no physics made (one-sample spikes, `super::glitch`), bridged by
-    /// their neighbours' midpoint before the fits; the files are unchanged. Empty for
+    /// Samples that no physics made (runs of one to three bad samples,
+    /// `super::glitch`), bridged by the line between the samples that bound their run
+    /// before the fits; the files are unchanged. Empty for
     /// a clean log.
     pub glitches: Vec<Glitch>,
     /// Sentences a person can check.
@@ -1418,7 +1419,7 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 
 /// Diagnoses a session: see the module docs.
 ///
-/// The phases: one-sample glitches in the measured channels bridged
+/// The phases: glitches (runs of one to three bad samples) in the measured channels bridged
 /// ([`glitch::bridge`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
 /// balance (`rank_hand`, on the reading corrected by what the cart balance found about
@@ -1703,18 +1704,19 @@ fn glitch_evidence(glitches: &[Glitch]) -> String {
         .take(SHOWN)
         .map(|g| {
             format!(
-                "{} {} at {:.4} s ({:+.4e} {} from its neighbours)",
+                "{} {} at {:.4} s ({:+.4e} {} off the line, a run of {})",
                 g.file,
                 g.channel,
                 g.t_s,
                 g.recorded - g.bridged,
-                glitch::unit_of(g.channel)
+                glitch::unit_of(g.channel),
+                g.run
             )
         })
         .collect();
     let more = glitches.len().saturating_sub(SHOWN);
     format!(
-        "{} one-sample glitch(es) bridged by their neighbours' midpoint before the fits \
+        "{} glitched sample(s) bridged by the line between the samples that bound their run before the fits \
          (the files are unchanged): {}{}",
         glitches.len(),
         each.join("; "),

@@ -1,30 +1,38 @@
-//! One-sample glitches in a recorded channel, found and bridged before the balances
-//! are fitted.
+//! Glitches in a recorded channel, runs of one to [`MAX_RUN`] samples that no physics
+//! made, found and bridged before the balances are fitted.
 //!
-//! A rig's log can hold a sample that no physics made: an encoder read torn by
-//! interference, a force sensor's converter spiking for one conversion. The balances
-//! differentiate the position twice and square their residuals, so one such sample
-//! weighs far beyond its share: six 2 mm encoder glitches in 100 000 rows double the
-//! cart baseline's NRMSE and take a 1.1 ms actuation delay out of the findings
-//! (`hil/docs/notes/2026-12-06-glitches.md`).
+//! A rig's log can hold samples that no physics made: an encoder read torn by
+//! interference, a force sensor's converter spiking for a conversion or two, a logger
+//! repeating a frame it missed. The balances differentiate the position twice and
+//! square their residuals, so one such sample weighs far beyond its share: six 2 mm
+//! encoder glitches in 100 000 rows double the cart baseline's NRMSE and take a 1.1 ms
+//! actuation delay out of the findings, and two-sample ones make the faulty-unit rule
+//! set aside three good trials (`hil/docs/notes/2026-12-06-glitches.md`).
 //!
-//! **The signature.** With `e_i = x_i − (x_{i−1} + x_{i+1})/2`, the sample's departure
-//! from its neighbours' midpoint, a spike `s` on sample `i` alone gives `e_i = s` and
-//! `e_{i±1} = −s/2`, and leaves `e_{i±2}` alone. A glitch is a sample whose `e_i` is
-//! above the threshold below while both neighbours' are of the other sign and
-//! 0.25–0.75 of its size, and the samples two away carry less than a quarter of it.
-//! A stale sample (a logger repeating the previous frame) during motion at speed `v`
-//! has the same signature, of size `v·dt`, and its neighbours' midpoint is what was
-//! read. Motion the rig can make has none of this: an acceleration, however sharp, bends
-//! neighbouring samples the same way (`e_{i±1}` of the same sign as `e_i`); a step (a
-//! missed encoder count, a re-tare) gives `e` of opposite signs on two samples, not
-//! one between two halves; a ringing sensor alternates with ratios near 0 (at a
-//! quarter of the rate) or 1 (at half of it).
+//! **The signature.** A run of `L` samples, rows `i … i+L−1`, bounded by rows
+//! `a = i−1` and `b = i+L`. Each run sample's departure `r_k` is its distance from the
+//! straight line between the bounding samples. The run is a glitch when
+//! - every `r_k` is above the threshold below, all of one sign;
+//! - with the run replaced by that line, the path through it is smooth: at the bounding
+//!   samples and the ones beyond them, the departure from the neighbours' midpoint,
+//!   `e_j = x_j − (x_{j−1} + x_{j+1})/2`, is below a quarter of the run's smallest
+//!   `|r_k|`.
+//!
+//! For one sample this is the lone spike's pattern: with `e_i = s`, its neighbours
+//! carry `−s/2` each, within `s/4`, and the samples two away less than `s/4`. A run of
+//! a constant offset (a stuck bit, a torn word) leaves the line exactly; a stale run (a
+//! logger repeating the last frame `L` times) during motion at speed `v` departs by
+//! `v·dt … L·v·dt`, and the line is what was read. Motion the rig can make has none of
+//! this: an acceleration, however sharp, bends the path outside the run as well as in
+//! it; a step (a missed encoder count burst, a re-tare) leaves the path bent at the
+//! bounding samples by half the run's smallest departure or more; a ringing sensor
+//! bends it at every sample. Each run is searched at the shortest length that explains
+//! it, and a run of constant offset fits no other length.
 //!
 //! **The threshold** is the largest of
 //! - [`ROBUST_SIGMAS`] times the channel's robust scale of `e` in the trial
 //!   (1.4826 × its median absolute deviation, the standard deviation for Gaussian
-//!   noise): a spike of ten sigmas with the exact pattern does not arise from noise;
+//!   noise): a departure of ten sigmas with the exact pattern does not arise from noise;
 //! - [`QUANTA`] times the channel's smallest recorded step (its quantum, or a
 //!   fraction of it for block means): a count of dither on a coarse encoder is not a
 //!   glitch;
@@ -33,6 +41,13 @@
 //!   a fit (a balance's error from a spike grows with its square: 20 µm is 10⁻⁴ of the
 //!   harm of 2 mm).
 //!
+//! **Runs of at most [`MAX_RUN`] samples.** A lost frame or a torn read spoils one to
+//! a few samples. Longer runs are left as recorded: at 4 kHz four samples are a
+//! millisecond, the time scale of a real impact on the handle, and a real force that
+//! the carts followed must stay in the balance. What a run of three may still be, on
+//! the force channels at 1 kHz, is a knock on the handle of 3 ms with a flat top; each
+//! bridged sample is listed so that a person can look.
+//!
 //! **The measured channels only:** the encoder's position, the force sensor's force
 //! and the drive's velocity. The motor command and the perturbation are computed by
 //! the controller and sent as logged, so a one-sample spike in them is a force the
@@ -40,10 +55,11 @@
 //! imported servo axis, `recordings/example-servo-axis`, logs 31 such kicks of about
 //! 1 N in its command).
 //!
-//! **The bridge.** A glitch is replaced by its neighbours' midpoint, for the fits only:
-//! the files are never changed, and [`Glitch`] lists each one with the trial's file,
-//! the channel and the time so that a person can look. Runs of two or more bad samples,
-//! and the first and last two samples of a trial, are left as recorded.
+//! **The bridge.** A glitch's samples are replaced by the line between its bounding
+//! samples, for the fits only: the files are never changed, and [`Glitch`] lists each
+//! sample with the trial's file, the channel and the time so that a person can look.
+//! Runs longer than [`MAX_RUN`], and runs within two samples of a trial's first or last
+//! sample, are left as recorded.
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
@@ -55,11 +71,12 @@ use super::stats::upper_median;
 pub const ROBUST_SIGMAS: f64 = 10.0;
 /// A glitch's departure in the channel's smallest recorded steps, at least.
 pub const QUANTA: f64 = 10.0;
-/// The neighbours' share of the glitch's departure, opposite in sign: a lone spike
-/// gives one half to each.
-const NEIGHBOUR_SHARE: (f64, f64) = (0.25, 0.75);
-/// The samples two away carry less than this share (the spike is alone).
-const SECOND_NEIGHBOUR_SHARE: f64 = 0.25;
+/// The longest run of bad samples bridged (module docs).
+pub const MAX_RUN: usize = 3;
+/// With the run bridged, the path's departure from the neighbours' midpoint at the
+/// bounding samples and the ones beyond them stays below this share of the run's
+/// smallest departure (the path is smooth through it).
+const SMOOTH_SHARE: f64 = 0.25;
 
 /// A sample bridged before the fits.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -74,8 +91,10 @@ pub struct Glitch {
     pub t_s: f64,
     /// The recorded value.
     pub recorded: f64,
-    /// The value the fits used: its neighbours' midpoint.
+    /// The value the fits used: on the line between the samples that bound its run.
     pub bridged: f64,
+    /// The number of samples in its run (1 for a lone spike).
+    pub run: usize,
 }
 
 /// The searched channels, each with the physical floor of a glitch on it in its unit
@@ -102,9 +121,10 @@ pub fn unit_of(channel: &str) -> &'static str {
     }
 }
 
-/// The rows of `x` that carry a one-sample glitch of at least `floor` (module docs).
+/// The glitches of `x` of at least `floor`: runs of one to [`MAX_RUN`] samples, each as
+/// its first row and its length, in row order (module docs).
 #[must_use]
-pub fn find(x: &[f64], floor: f64) -> Vec<usize> {
+pub fn find(x: &[f64], floor: f64) -> Vec<(usize, usize)> {
     let n = x.len();
     if n < 5 {
         return Vec::new();
@@ -115,26 +135,44 @@ pub fn find(x: &[f64], floor: f64) -> Vec<usize> {
     let threshold = (ROBUST_SIGMAS * robust_sigma(&e))
         .max(QUANTA * smallest_step(x))
         .max(floor);
-    // e[k] belongs to row k + 1.
-    let at = |row: usize| e[row - 1];
-    (2..n - 2)
-        .filter(|&row| {
-            let s = at(row);
-            if s.abs() < threshold {
-                return false;
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for len in 1..=MAX_RUN {
+        // The run's rows `i..i + len` and the two beyond each of its bounds lie in the
+        // trial.
+        for i in 2..n.saturating_sub(len + 1) {
+            let overlaps = runs.iter().any(|&(j, l)| i < j + l + 2 && j < i + len + 2);
+            if !overlaps && is_glitch(x, i, len, threshold) {
+                runs.push((i, len));
             }
-            let share = |r: usize| -at(r) / s;
-            let (lo, hi) = NEIGHBOUR_SHARE;
-            let neighbours = [row - 1, row + 1]
-                .iter()
-                .all(|&r| (lo..=hi).contains(&share(r)));
-            let alone = [row - 2, row + 2]
-                .iter()
-                .filter(|&&r| r >= 1 && r < n - 1)
-                .all(|&r| at(r).abs() < SECOND_NEIGHBOUR_SHARE * s.abs());
-            neighbours && alone
-        })
-        .collect()
+        }
+    }
+    runs.sort_unstable();
+    runs
+}
+
+/// Whether rows `i..i + len` of `x` are a glitch at `threshold` (module docs); rows
+/// `i − 2` and `i + len + 1` exist.
+fn is_glitch(x: &[f64], i: usize, len: usize, threshold: f64) -> bool {
+    let (a, b) = (i - 1, i + len);
+    let step = (x[b] - x[a]) / (len + 1) as f64;
+    let line = |k: usize| x[a] + step * (k - a) as f64;
+    let mut smallest = f64::INFINITY;
+    let mut sign = 0.0;
+    for (k, value) in x.iter().enumerate().take(b).skip(i) {
+        let r = value - line(k);
+        if r.abs() < threshold || (sign != 0.0 && r.signum() != sign) {
+            return false;
+        }
+        sign = r.signum();
+        smallest = smallest.min(r.abs());
+    }
+    // The path with the run bridged, at the bounding samples and the ones beyond.
+    let bridged = |k: usize| if (i..b).contains(&k) { line(k) } else { x[k] };
+    let bend = |j: usize| bridged(j) - 0.5 * (bridged(j - 1) + bridged(j + 1));
+    [a - 1, a, b, b + 1]
+        .iter()
+        .filter(|&&j| j >= 1 && j + 1 < x.len())
+        .all(|&j| bend(j).abs() < SMOOTH_SHARE * smallest)
 }
 
 /// 1.4826 × the median absolute deviation of `e` from its median.
@@ -182,17 +220,22 @@ pub fn bridge(session: &Session) -> (Option<Session>, Vec<Glitch>) {
             let Some(x) = trial.column(channel) else {
                 continue;
             };
-            // No two glitches are neighbours (each needs its neighbours' departures
-            // at half its own), so each bridge reads recorded values.
-            for row in find(x, floor) {
-                found.push(Glitch {
-                    file: entry.file.clone(),
-                    channel,
-                    row,
-                    t_s: trial.t_s[row],
-                    recorded: x[row],
-                    bridged: 0.5 * (x[row - 1] + x[row + 1]),
-                });
+            // No two runs come within two samples of each other (`find`), so each
+            // bridge reads recorded values.
+            for (start, run) in find(x, floor) {
+                let (a, b) = (start - 1, start + run);
+                let step = (x[b] - x[a]) / (run + 1) as f64;
+                for row in start..b {
+                    found.push(Glitch {
+                        file: entry.file.clone(),
+                        channel,
+                        row,
+                        t_s: trial.t_s[row],
+                        recorded: x[row],
+                        bridged: x[a] + step * (row - a) as f64,
+                        run,
+                    });
+                }
             }
         }
         if found.len() > first {
@@ -229,6 +272,18 @@ mod tests {
             .collect()
     }
 
+    /// `x` with white noise of `sd` added: a recorded channel's fine noise, which keeps
+    /// the smallest recorded step and the robust scale small, so that the threshold is
+    /// the floor and a pattern is judged by its shape alone.
+    fn with_noise(mut x: Vec<f64>, sd: f64) -> Vec<f64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let noise = Normal::new(0.0, sd).unwrap();
+        for v in &mut x {
+            *v += noise.sample(&mut rng);
+        }
+        x
+    }
+
     #[test]
     fn a_lone_spike_is_found_and_nothing_else() {
         // Checked on ten noise draws: the 2 mm spike and the 50 µm one are the only
@@ -239,21 +294,68 @@ mod tests {
             let mut x = clean.clone();
             x[300] += 2e-3;
             x[1400] -= 50e-6;
-            assert_eq!(find(&x, 20e-6), vec![300, 1400], "seed {seed}");
+            assert_eq!(find(&x, 20e-6), vec![(300, 1), (1400, 1)], "seed {seed}");
             // A stale sample (a logger repeating the previous frame) at the reach's
             // peak speed, 0.78 m/s: `e = −v·dt`, its neighbours `+v·dt/2`, the same
             // signature; its midpoint is what the encoder read.
             let mut x = clean.clone();
             x[300] = x[299];
-            assert_eq!(find(&x, 20e-6), vec![300], "seed {seed}");
+            assert_eq!(find(&x, 20e-6), vec![(300, 1)], "seed {seed}");
         }
+    }
+
+    #[test]
+    fn runs_of_two_and_three_are_found_at_their_length() {
+        // Checked on ten noise draws: offset runs of 2 and 3 samples (a torn word held
+        // for a frame or two), and a stale run of three at the reach's peak speed (the
+        // logger repeating a frame), each found once, at its own start and length.
+        for seed in 0..10 {
+            let clean = reach(seed);
+            let mut x = clean.clone();
+            x[200..202].iter_mut().for_each(|v| *v += 2e-3);
+            x[900..903].iter_mut().for_each(|v| *v -= 60e-6);
+            let held = x[299];
+            x[300..303].iter_mut().for_each(|v| *v = held);
+            assert_eq!(
+                find(&x, 20e-6),
+                vec![(200, 2), (300, 3), (900, 3)],
+                "seed {seed}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_run_longer_than_three_or_a_bump_in_the_path_is_left() {
+        let clean = reach(1);
+        // Four samples off: a millisecond at 4 kHz, the time scale of a real impact.
+        let mut x = clean.clone();
+        x[200..204].iter_mut().for_each(|v| *v += 2e-3);
+        assert!(find(&x, 20e-6).is_empty());
+        // A force that rises over three samples and decays over five: the path bends
+        // beyond any three-sample run.
+        let mut f = vec![0.0; 400];
+        for (k, v) in [10.0, 20.0, 30.0, 25.0, 20.0, 15.0, 10.0, 5.0]
+            .iter()
+            .enumerate()
+        {
+            f[200 + k] = *v;
+        }
+        let f = with_noise(f, 1e-3);
+        assert!(find(&f, 1.0).is_empty());
+        // The same force with its peak alone 10 N high is a one-sample glitch on it.
+        let mut g = f.clone();
+        g[202] += 10.0;
+        assert_eq!(find(&g, 1.0), vec![(202, 1)]);
     }
 
     #[test]
     fn steps_ringing_dither_and_sharp_motion_are_not_glitches() {
         let n = 400;
         // A step of 1 mm (a missed count burst, a re-tare).
+        // Each signal carries fine noise (`with_noise`), so that the threshold is the
+        // floor and only the shape keeps it from being a glitch.
         let step: Vec<f64> = (0..n).map(|i| if i < 200 { 0.0 } else { 1e-3 }).collect();
+        let step = with_noise(step, 1e-7);
         assert!(find(&step, 20e-6).is_empty());
         // A sensor ringing at half and at a quarter of the sampling rate, 5 N.
         let half: Vec<f64> = (0..n)
@@ -263,6 +365,7 @@ mod tests {
                 _ => 0.0,
             })
             .collect();
+        let half = with_noise(half, 1e-3);
         assert!(find(&half, 1.0).is_empty());
         let quarter: Vec<f64> = (0..n)
             .map(|i| {
@@ -273,6 +376,7 @@ mod tests {
                 }
             })
             .collect();
+        let quarter = with_noise(quarter, 1e-3);
         assert!(find(&quarter, 1.0).is_empty());
         // A coarse encoder (0.1 mm counts) dithering by one count at rest.
         let dither: Vec<f64> = (0..n)
@@ -291,6 +395,7 @@ mod tests {
                 x
             })
             .collect();
+        let impact = with_noise(impact, 1e-7);
         assert!(find(&impact, 20e-6).is_empty());
     }
 
@@ -309,6 +414,6 @@ mod tests {
         assert!(find(&f, 1.0).is_empty());
         // 40 N on the same: found.
         f[700] += 40.0;
-        assert_eq!(find(&f, 1.0), vec![700]);
+        assert_eq!(find(&f, 1.0), vec![(700, 1)]);
     }
 }

@@ -6,7 +6,7 @@
 //! | file | idea |
 //! |---|---|
 //! | `effect.rs` | the catalog as types: [`EffectKind`] (names, sides) and [`Effect`] (parameters in the world's and the arm's types) |
-//! | `glitch.rs` | one-sample glitches in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
+//! | `glitch.rs` | glitches (runs of one to three bad samples) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |

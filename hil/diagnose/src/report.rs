@@ -107,7 +107,7 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(g) = d.glitches.first() {
         let _ = writeln!(
             out,
-            "glitches  {} one-sample spike(s) bridged by their neighbours before the fits, the first {} {} at {:.4} s (all in the evidence and `glitches` of --json)",
+            "glitches  {} sample(s) that no physics made (runs of one to three) bridged before the fits, the first {} {} at {:.4} s (all in the evidence and `glitches` of --json)",
             d.glitches.len(),
             g.file,
             g.channel,
