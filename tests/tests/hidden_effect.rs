@@ -415,7 +415,7 @@ fn a_soft_heavily_damped_grip_is_sized() {
 /// so the folds put it anywhere, the softest setting included; judged an edge there,
 /// the friction was rejected and the library reported a quadratic drag and a pull
 /// instead (seeds 4, 7 and 8 of 1–8 at 2 N s/m, this one the first; 3 of 4 subjects of
-/// a sweep at 1, 2 and 5 N s/m).
+/// a sweep at 1, 2 and 5 N s/m). The knee is listed in the cause's `undetermined`.
 #[test]
 fn a_viscous_friction_without_a_coulomb_force_is_named() {
     let b = 2.0;
@@ -430,6 +430,13 @@ fn a_viscous_friction_without_a_coulomb_force_is_named() {
     assert!(
         found_fc.abs() < 0.25,
         "Coulomb {found_fc} N where none is hidden"
+    );
+    // The knee the folds put anywhere is said to be undetermined, not reported bare.
+    assert_eq!(
+        c.undetermined.keys().collect::<Vec<_>>(),
+        ["smooth_velocity_m_per_s"],
+        "{:?}",
+        c.undetermined
     );
     assert!(d.unexplained.is_none(), "{:?}", d.unexplained);
 }

@@ -92,6 +92,7 @@ use super::hand::{
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
 use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
 use super::joint::{Joint, Member, MemberParameters, refine};
+use super::report::undetermined;
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
@@ -264,6 +265,12 @@ pub struct Cause {
     /// model that has them, and its parameters (and theirs) come from one joint fit.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub given: Vec<String>,
+    /// Parameters the data do not determine, each with why
+    /// ([`super::report::undetermined`]: a friction's knee beside a Coulomb force below
+    /// the rig's resolution). Their values are what the fit settled on, for the model
+    /// file to simulate; a lab should not read them.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub undetermined: BTreeMap<String, String>,
     /// The share of what the model it was judged against leaves above its balance's
     /// noise floor ([`Diagnosis::cart_noise_floor_nrmse`],
     /// [`Diagnosis::hand_noise_floor_nrmse`]) that this cause removes, `(b² − e²) /
@@ -644,6 +651,7 @@ impl Cause {
             parameter_se: r.parameter_se.clone(),
             parameter_range: r.parameter_range.clone(),
             given: r.given.clone(),
+            undetermined: undetermined(kind, &r.parameters),
             share_above_floor: None,
             judged_nrmse: [r.extended_nrmse / (1.0 - r.gain), r.extended_nrmse],
         })
@@ -664,6 +672,7 @@ impl Cause {
                 why: e.to_string(),
             }
         })?;
+        self.undetermined = undetermined(self.name, &parameters);
         self.parameters = parameters;
         self.parameter_se = parameter_se;
         // The range belonged to the fit whose parameters these replace.
