@@ -49,9 +49,10 @@ fn example_ripple_is_found_and_its_model_round_trips() {
 }
 
 /// Six one-sample spikes no physics made, in three trials of the example (a 2 mm
-/// encoder read, a 40 N sensor conversion), and two runs (2 mm on two encoder samples,
-/// 30 N on three sensor conversions): they are found at their file, channel, row and
-/// run length, bridged, and the findings are the clean session's. Left in, the six
+/// encoder read, a 40 N sensor conversion), two runs (2 mm on two encoder samples,
+/// 30 N on three sensor conversions), a trial opened with a stale frame and a trial's
+/// last sample off: they are found at their file, channel, row and run length,
+/// bridged, and the findings are the clean session's. Left in, the six
 /// spikes take the ripple's held-out gain from 0.963 to 0.869 (its extended NRMSE 3.5×;
 /// measured with the diagnosis before it bridged them,
 /// `hil/docs/notes/2026-12-06-glitches.md`).
@@ -72,6 +73,10 @@ fn glitches_are_bridged_and_change_no_finding() {
     }
     planted.push((4, "x_m", 2100, 2, 2e-3));
     planted.push((9, "fy_n", 600, 3, 30.0));
+    // A trial opened with a stale frame 0.2 m off, and a last sample 30 N off.
+    planted.push((3, "y_m", 0, 1, -0.2));
+    let last = clean.trials[10].len() - 1;
+    planted.push((10, "fx_n", last, 1, 30.0));
     // The diagnosis lists them by trial, then channel in the order searched, then row.
     let order = ["x_m", "y_m", "fx_n", "fy_n"];
     let rank = |c: &str| order.iter().position(|o| *o == c);
@@ -93,12 +98,19 @@ fn glitches_are_bridged_and_change_no_finding() {
     // recorded value's departure from the bridge is the planted size plus the clean
     // sample's own departure from the line between the run's bounding samples (the
     // channel's noise and curvature), to rounding.
+    // At a trial's edge the line is the one through the two samples beyond the run.
     let mut want = Vec::new();
     for &(index, channel, row, run, size) in &planted {
         let x = clean.trials[index].column(channel).unwrap();
-        let (a, b) = (row - 1, row + run);
+        let b = row + run;
         for k in row..b {
-            let line = x[a] + (x[b] - x[a]) * (k - a) as f64 / (run + 1) as f64;
+            let line = if row == 0 {
+                x[b] + (x[b] - x[b + 1]) * (b - k) as f64
+            } else if b == x.len() {
+                x[row - 1] + (x[row - 1] - x[row - 2]) * (k + 1 - row) as f64
+            } else {
+                x[row - 1] + (x[b] - x[row - 1]) * (k + 1 - row) as f64 / (run + 1) as f64
+            };
             want.push((
                 s.manifest.trials[index].file.clone(),
                 channel,
@@ -129,14 +141,14 @@ fn glitches_are_bridged_and_change_no_finding() {
     assert!(
         g.evidence
             .iter()
-            .any(|e| e.contains("11 glitched sample(s)")),
+            .any(|e| e.contains("13 glitched sample(s)")),
         "{:?}",
         g.evidence
     );
 
     // The findings: the same cause, its parameters within 0.5 % and its gain within
     // 0.002 (the bridge is the line, not the clean value, so the fits move by the
-    // curvature of eleven samples in 56 000).
+    // curvature of thirteen samples in 56 000).
     assert_eq!(g.cause, c.cause);
     for (k, v) in &c.parameters {
         let w = g.parameters[k];

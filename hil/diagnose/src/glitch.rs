@@ -19,7 +19,15 @@
 //!   `|r_k|`.
 //!
 //! For one sample this is the lone spike's pattern: with `e_i = s`, its neighbours
-//! carry `−s/2` each, within `s/4`, and the samples two away less than `s/4`. A run of
+//! carry `−s/2` each, within `s/4`, and the samples two away less than `s/4`.
+//!
+//! **At a trial's first or last sample** a run has one bound. Its line is the one
+//! through that bound and the sample beyond it, extrapolated, and the path is checked
+//! at the three samples beyond the bound, against an eighth of the run's smallest
+//! departure (a glitch on the sample beyond the bound lends the run a departure four
+//! times the bend it leaves, so a quarter could not tell the two apart). A logger that
+//! opens a trial's file with the previous trial's last frame leaves such a run: 0.25 m
+//! from where the trial starts, it took the cart baseline's NRMSE from 0.039 to 0.505. A run of
 //! a constant offset (a stuck bit, a torn word) leaves the line exactly; a stale run (a
 //! logger repeating the last frame `L` times) during motion at speed `v` departs by
 //! `v·dt … L·v·dt`, and the line is what was read. Motion the rig can make has none of
@@ -58,8 +66,7 @@
 //! **The bridge.** A glitch's samples are replaced by the line between its bounding
 //! samples, for the fits only: the files are never changed, and [`Glitch`] lists each
 //! sample with the trial's file, the channel and the time so that a person can look.
-//! Runs longer than [`MAX_RUN`], and runs within two samples of a trial's first or last
-//! sample, are left as recorded.
+//! Runs longer than [`MAX_RUN`] are left as recorded.
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
@@ -77,6 +84,10 @@ pub const MAX_RUN: usize = 3;
 /// bounding samples and the ones beyond them stays below this share of the run's
 /// smallest departure (the path is smooth through it).
 const SMOOTH_SHARE: f64 = 0.25;
+/// The same at a trial's first or last sample, where the run has one bound: a glitch on
+/// the sample beyond that bound bends the path there by exactly [`SMOOTH_SHARE`] of the
+/// departure it lends the run through the extrapolated line, so the edge asks for half.
+const EDGE_SMOOTH_SHARE: f64 = 0.125;
 
 /// A sample bridged before the fits.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -137,9 +148,12 @@ pub fn find(x: &[f64], floor: f64) -> Vec<(usize, usize)> {
         .max(floor);
     let mut runs: Vec<(usize, usize)> = Vec::new();
     for len in 1..=MAX_RUN {
-        // The run's rows `i..i + len` and the two beyond each of its bounds lie in the
-        // trial.
-        for i in 2..n.saturating_sub(len + 1) {
+        // A run at a trial's edge needs three samples beyond its one bound: the two its
+        // line runs through and one more to check the path's bend.
+        if n < len + 4 {
+            continue;
+        }
+        for i in 0..=n - len {
             let overlaps = runs.iter().any(|&(j, l)| i < j + l + 2 && j < i + len + 2);
             if !overlaps && is_glitch(x, i, len, threshold) {
                 runs.push((i, len));
@@ -150,12 +164,34 @@ pub fn find(x: &[f64], floor: f64) -> Vec<(usize, usize)> {
     runs
 }
 
-/// Whether rows `i..i + len` of `x` are a glitch at `threshold` (module docs); rows
-/// `i − 2` and `i + len + 1` exist.
+/// The line a run of `len` rows from `start` is bridged by, as a function of the row:
+/// through the samples that bound it; at a trial's first or last sample, where it has
+/// one bound, through that bound and the sample beyond it (extrapolated).
+fn line(x: &[f64], start: usize, len: usize) -> impl Fn(usize) -> f64 + '_ {
+    let (anchor, slope) = if start == 0 {
+        (len, x[len] - x[len + 1])
+    } else if start + len == x.len() {
+        (start - 1, x[start - 1] - x[start - 2])
+    } else {
+        (
+            start - 1,
+            (x[start + len] - x[start - 1]) / (len + 1) as f64,
+        )
+    };
+    // Rows count away from the anchor: forward, or backward at the first sample.
+    let ahead = start != 0;
+    move |k: usize| {
+        let d = if ahead { k - anchor } else { anchor - k };
+        x[anchor] + slope * d as f64
+    }
+}
+
+/// Whether rows `i..i + len` of `x` are a glitch at `threshold` (module docs); `x` has
+/// at least `len + 4` samples.
 fn is_glitch(x: &[f64], i: usize, len: usize, threshold: f64) -> bool {
-    let (a, b) = (i - 1, i + len);
-    let step = (x[b] - x[a]) / (len + 1) as f64;
-    let line = |k: usize| x[a] + step * (k - a) as f64;
+    let n = x.len();
+    let b = i + len;
+    let line = line(x, i, len);
     let mut smallest = f64::INFINITY;
     let mut sign = 0.0;
     for (k, value) in x.iter().enumerate().take(b).skip(i) {
@@ -166,13 +202,23 @@ fn is_glitch(x: &[f64], i: usize, len: usize, threshold: f64) -> bool {
         sign = r.signum();
         smallest = smallest.min(r.abs());
     }
-    // The path with the run bridged, at the bounding samples and the ones beyond.
+    // The path with the run bridged: at the bounding samples and the ones beyond; at a
+    // trial's edge, the three beyond its one bound (the first is on the line).
     let bridged = |k: usize| if (i..b).contains(&k) { line(k) } else { x[k] };
     let bend = |j: usize| bridged(j) - 0.5 * (bridged(j - 1) + bridged(j + 1));
-    [a - 1, a, b, b + 1]
-        .iter()
-        .filter(|&&j| j >= 1 && j + 1 < x.len())
-        .all(|&j| bend(j).abs() < SMOOTH_SHARE * smallest)
+    let (rows, share): (Vec<usize>, f64) = if i == 0 {
+        ((b..b + 3).collect(), EDGE_SMOOTH_SHARE)
+    } else if b == n {
+        ((i.saturating_sub(3)..i).collect(), EDGE_SMOOTH_SHARE)
+    } else {
+        (
+            (i.saturating_sub(2)..i).chain(b..b + 2).collect(),
+            SMOOTH_SHARE,
+        )
+    };
+    rows.into_iter()
+        .filter(|&j| j >= 1 && j + 1 < n)
+        .all(|j| bend(j).abs() < share * smallest)
 }
 
 /// 1.4826 × the median absolute deviation of `e` from its median.
@@ -223,16 +269,17 @@ pub fn bridge(session: &Session) -> (Option<Session>, Vec<Glitch>) {
             // No two runs come within two samples of each other (`find`), so each
             // bridge reads recorded values.
             for (start, run) in find(x, floor) {
-                let (a, b) = (start - 1, start + run);
-                let step = (x[b] - x[a]) / (run + 1) as f64;
-                for row in start..b {
+                let line = line(x, start, run);
+                for (row, (&recorded, &t_s)) in
+                    x.iter().zip(&trial.t_s).enumerate().skip(start).take(run)
+                {
                     found.push(Glitch {
                         file: entry.file.clone(),
                         channel,
                         row,
-                        t_s: trial.t_s[row],
-                        recorded: x[row],
-                        bridged: x[a] + step * (row - a) as f64,
+                        t_s,
+                        recorded,
+                        bridged: line(row),
                         run,
                     });
                 }
@@ -322,6 +369,39 @@ mod tests {
                 "seed {seed}"
             );
         }
+    }
+
+    #[test]
+    fn runs_at_a_trials_first_or_last_sample_are_found() {
+        // A logger that opens a trial with the previous trial's last frame (0.25 m
+        // away), one that does so for two frames, and a last sample read as zero; on
+        // ten noise draws each is found at its edge and bridged onto the line the two
+        // samples beyond it continue.
+        for seed in 0..10 {
+            let clean = reach(seed);
+            let n = clean.len();
+            let mut x = clean.clone();
+            x[0] = -0.25;
+            x[n - 1] = 0.0;
+            assert_eq!(find(&x, 20e-6), vec![(0, 1), (n - 1, 1)], "seed {seed}");
+            let line = line(&x, 0, 1);
+            assert!(
+                (line(0) - clean[0]).abs() < 5e-6,
+                "seed {seed}: {}",
+                line(0)
+            );
+            let mut x = clean.clone();
+            x[..2].iter_mut().for_each(|v| *v = -0.25);
+            assert_eq!(find(&x, 20e-6), vec![(0, 2)], "seed {seed}");
+        }
+        // A spike on the second sample is bridged from the first and the third.
+        let mut x = reach(1);
+        x[1] += 1e-3;
+        assert_eq!(find(&x, 20e-6), vec![(1, 1)]);
+        // A trial that starts in motion at 0.78 m/s (no glitch: the path is straight
+        // at its edge) has none.
+        let moving: Vec<f64> = reach(2)[300..].to_vec();
+        assert!(find(&moving, 20e-6).is_empty());
     }
 
     #[test]
