@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "3e829d21220d5b16d624582f60ee350d12fbb7cd6c878fc55dfa6f70c52b42c6",
+        "f50a23143ab86e3e17dc2a4ee3d21fc69c645194e7927800e3554b1db05c6b34",
     ),
     (
         "example-friction",
-        "d0b31b76fc211d0c51939c12f9ab70ec38b49ab8794332cc97c99c545b6f5ec6",
+        "006ea41f1d2c0de70ff18a6e214d1e67edc474262a2e66cdf53ec05b959dc877",
     ),
     (
         "example-nuisance",
-        "6b3d6f1984e80240892578addf13107617d93cb5b3abf912f56b565cb86996d1",
+        "0e57ee4ea6ca50cee19474ff86e2cf07906249900a4c291adcb802dcbfbf26ac",
     ),
     (
         "example-rotation-mass",
-        "698bd68689c72cdf225962e031c5d1d8bfadc3a9a720e9f182fb01677cc4441e",
+        "e29afd6e99fa616069f833adc109854a00bd116b003186c16c49e3a55ccd1451",
     ),
 ];
 

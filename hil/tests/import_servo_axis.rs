@@ -136,6 +136,7 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
         "{}",
         d["glitches"]
     );
+    assert_eq!(d["slips"].as_array().unwrap().len(), 0, "{}", d["slips"]);
     // The written model carries every cause, the cogging on x alone, and the masses
     // fitted with the causes (none on the absent y axis).
     let m = rigtwin_diagnose::ExtendedModel::read(&model_file).unwrap();

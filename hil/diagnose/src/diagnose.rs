@@ -96,6 +96,7 @@ use super::report::undetermined;
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
+use super::slip::{self, Slip};
 use super::stats::{jackknife_se, mean_sd, student_t_critical, upper_median};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
@@ -266,7 +267,7 @@ pub struct Cause {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub given: Vec<String>,
     /// Parameters the data do not determine, each with why
-    /// ([`super::report::undetermined`]: a friction's knee beside a Coulomb force below
+    /// (`report::undetermined`: a friction's knee beside a Coulomb force below
     /// the rig's resolution). Their values are what the fit settled on, for the model
     /// file to simulate; a lab should not read them.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
@@ -458,6 +459,10 @@ pub struct Diagnosis {
     /// before the fits; the files are unchanged. Empty for
     /// a clean log.
     pub glitches: Vec<Glitch>,
+    /// Samples the logger lost while keeping its clock (`super::slip`), found after the
+    /// glitches are bridged and put back before the fits; the files are unchanged.
+    /// Empty for a clean log.
+    pub slips: Vec<Slip>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
 }
@@ -1441,6 +1446,8 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
     let (bridged, glitches) = glitch::bridge(session);
     let session = bridged.as_ref().unwrap_or(session);
+    let (repaired, slips) = slip::repair(session);
+    let session = repaired.as_ref().unwrap_or(session);
     let (mut a, residuals) = diagnose_units(session, opts, &[])?;
     let faults = faults(&residuals);
     if !faults.is_empty() {
@@ -1470,6 +1477,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         d.evidence.push(glitch_evidence(&glitches));
     }
     d.glitches = glitches;
+    if !slips.is_empty() {
+        d.evidence.push(slip_evidence(&slips));
+    }
+    d.slips = slips;
     Ok(a)
 }
 
@@ -1545,6 +1556,7 @@ fn diagnose_units(
         not_judged: Vec::new(),
         cart_set_aside: Vec::new(),
         glitches: Vec::new(),
+        slips: Vec::new(),
         evidence: Vec::new(),
     };
     let plant_ok = signals.len() >= MIN_TRIALS;
@@ -1701,6 +1713,37 @@ fn set_aside_evidence(set_aside: &[SetAside], units: usize) -> String {
          doing what was logged, a snag, a collision); the hand balance keeps them",
         set_aside.len(),
         each.join("; ")
+    )
+}
+
+/// The evidence sentence for the lost samples put back: how many, and the first few
+/// with file, row and time.
+fn slip_evidence(slips: &[Slip]) -> String {
+    const SHOWN: usize = 5;
+    let each: Vec<String> = slips
+        .iter()
+        .take(SHOWN)
+        .map(|s| {
+            format!(
+                "{} after row {} ({:.4} s; the position stepped {:.3} mm more than its neighbours)",
+                s.file,
+                s.after_row,
+                s.t_s,
+                s.step_m * 1e3
+            )
+        })
+        .collect();
+    let more = slips.len().saturating_sub(SHOWN);
+    format!(
+        "{} sample(s) the logger lost while keeping its clock put back before the fits \
+         (every channel slips by one row there; the files are unchanged): {}{}",
+        slips.len(),
+        each.join("; "),
+        if more > 0 {
+            format!("; and {more} more (`slips` in --json)")
+        } else {
+            String::new()
+        }
     )
 }
 

@@ -7,6 +7,7 @@
 //! |---|---|
 //! | `effect.rs` | the catalog as types: [`EffectKind`] (names, sides) and [`Effect`] (parameters in the world's and the arm's types) |
 //! | `glitch.rs` | glitches (runs of one to three bad samples) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
+//! | `slip.rs` | samples a logger lost while keeping its clock, found from the position and put back before the fits ([`slip::Slip`]) |
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
@@ -49,6 +50,7 @@ mod report;
 mod ripple;
 mod rotation;
 mod signals;
+pub mod slip;
 pub mod stats;
 pub mod unexplained;
 

@@ -106,6 +106,15 @@ pub fn table(d: &Diagnosis) -> String {
             ids.join(", ")
         );
     }
+    if let Some(s) = d.slips.first() {
+        let _ = writeln!(
+            out,
+            "lost samples  {} put back (a logger that dropped a frame and kept its clock), the first {} after row {} (all in the evidence and `slips` of --json)",
+            d.slips.len(),
+            s.file,
+            s.after_row
+        );
+    }
     if let Some(g) = d.glitches.first() {
         let _ = writeln!(
             out,
