@@ -21,7 +21,8 @@
 //! fit something else; it is not named. A friction knee at the sharpest setting is the
 //! sign-function limit of the law, not an edge; nor is any knee of a friction whose
 //! Coulomb force is below the rig's 0.25 N (a viscous friction: the knee shapes
-//! nothing, and the folds put it anywhere). A grip whose range (the stiffnesses the
+//! nothing, and the folds put it anywhere; a named friction lists such a knee as
+//! [`undetermined`]). A grip whose range (the stiffnesses the
 //! folds cannot tell from the found one) reaches 50 kN/m is not told from a rigid grip
 //! ([`unbounded_grip`]).
 //!
@@ -390,9 +391,65 @@ pub fn evidence_r2(
     Ok((ss_tot > 0.0).then(|| 1.0 - ss_res / ss_tot))
 }
 
+/// A named effect's parameters that the data cannot determine, each with why (empty
+/// when every one is determined): a friction's knee shapes its Coulomb force alone, so
+/// beside a Coulomb force below the rig's resolution (a viscous friction) it is
+/// whatever the folds put it at, and a lab should not read it.
+#[must_use]
+pub fn undetermined(
+    kind: EffectKind,
+    parameters: &BTreeMap<String, f64>,
+) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    if let (EffectKind::RailFriction, Some(fc)) = (kind, parameters.get("coulomb_n"))
+        && fc.abs() < FORCE_RESOLUTION_N
+    {
+        out.insert(
+            "smooth_velocity_m_per_s".to_string(),
+            format!(
+                "the knee of coulomb_n · tanh(v / knee) shapes the Coulomb force alone, \
+                 here {fc:.3} N, below the rig's {FORCE_RESOLUTION_N} N"
+            ),
+        );
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A friction's knee is flagged as undetermined beside a Coulomb force below the
+    /// rig's 0.25 N (a viscous friction), not beside one above it, and no other
+    /// effect's parameters are flagged.
+    #[test]
+    fn a_knee_beside_no_coulomb_force_is_undetermined() {
+        let friction = |fc: f64| {
+            [
+                ("coulomb_n".to_string(), fc),
+                ("viscous_n_s_per_m".to_string(), 2.0),
+                ("smooth_velocity_m_per_s".to_string(), 0.01),
+            ]
+            .into_iter()
+            .collect()
+        };
+        let flagged = undetermined(EffectKind::RailFriction, &friction(0.02));
+        assert_eq!(
+            flagged.keys().collect::<Vec<_>>(),
+            ["smooth_velocity_m_per_s"]
+        );
+        assert!(
+            flagged["smooth_velocity_m_per_s"].contains("0.020 N"),
+            "{flagged:?}"
+        );
+        assert_eq!(
+            undetermined(EffectKind::RailFriction, &friction(-0.1)).len(),
+            1
+        );
+        assert!(undetermined(EffectKind::RailFriction, &friction(0.3)).is_empty());
+        assert!(undetermined(EffectKind::HandleMass, &friction(0.0)).is_empty());
+    }
+
     use crate::candidate::gain_bounds;
 
     /// A friction at its softest knee (the last of 35) is at the edge while its Coulomb

@@ -75,6 +75,7 @@ use serde::Serialize;
 use super::bands::{BANDS_HZ, band_power};
 use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS, UnitResidual, still_noise_floor};
 use super::crossval::{CvFit, Folds, cross_validate};
+use super::decide::undetermined;
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
     immaterial, unbounded_grip,
@@ -92,7 +93,6 @@ use super::hand::{
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
 use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
 use super::joint::{Joint, Member, MemberParameters, refine};
-use super::report::undetermined;
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
@@ -267,7 +267,7 @@ pub struct Cause {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub given: Vec<String>,
     /// Parameters the data do not determine, each with why
-    /// (`report::undetermined`: a friction's knee beside a Coulomb force below
+    /// ([`super::decide::undetermined`]: a friction's knee beside a Coulomb force below
     /// the rig's resolution). Their values are what the fit settled on, for the model
     /// file to simulate; a lab should not read them.
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
@@ -1716,67 +1716,63 @@ fn set_aside_evidence(set_aside: &[SetAside], units: usize) -> String {
     )
 }
 
+/// The first [`EVIDENCE_SHOWN`] of a list for an evidence sentence, joined, and how
+/// many more the JSON's `field` lists.
+fn first_few(each: impl Iterator<Item = String>, total: usize, field: &str) -> String {
+    let shown: Vec<String> = each.take(EVIDENCE_SHOWN).collect();
+    let more = total.saturating_sub(EVIDENCE_SHOWN);
+    if more > 0 {
+        format!(
+            "{}; and {more} more (`{field}` in --json)",
+            shown.join("; ")
+        )
+    } else {
+        shown.join("; ")
+    }
+}
+
+/// How many glitches or lost samples an evidence sentence names.
+const EVIDENCE_SHOWN: usize = 5;
+
 /// The evidence sentence for the lost samples put back: how many, and the first few
 /// with file, row and time.
 fn slip_evidence(slips: &[Slip]) -> String {
-    const SHOWN: usize = 5;
-    let each: Vec<String> = slips
-        .iter()
-        .take(SHOWN)
-        .map(|s| {
-            format!(
-                "{} after row {} ({:.4} s; the position stepped {:.3} mm more than its neighbours)",
-                s.file,
-                s.after_row,
-                s.t_s,
-                s.step_m * 1e3
-            )
-        })
-        .collect();
-    let more = slips.len().saturating_sub(SHOWN);
+    let each = slips.iter().map(|s| {
+        format!(
+            "{} after row {} ({:.4} s; the position stepped {:.3} mm more than its neighbours)",
+            s.file,
+            s.after_row,
+            s.t_s,
+            s.step_m * 1e3
+        )
+    });
     format!(
         "{} sample(s) the logger lost while keeping its clock put back before the fits \
-         (every channel slips by one row there; the files are unchanged): {}{}",
+         (every channel slips by one row there; the files are unchanged): {}",
         slips.len(),
-        each.join("; "),
-        if more > 0 {
-            format!("; and {more} more (`slips` in --json)")
-        } else {
-            String::new()
-        }
+        first_few(each, slips.len(), "slips")
     )
 }
 
 /// The evidence sentence for the bridged glitches: how many, and the first few with
 /// file, channel, time and size.
 fn glitch_evidence(glitches: &[Glitch]) -> String {
-    const SHOWN: usize = 5;
-    let each: Vec<String> = glitches
-        .iter()
-        .take(SHOWN)
-        .map(|g| {
-            format!(
-                "{} {} at {:.4} s ({:+.4e} {} off the line, a run of {})",
-                g.file,
-                g.channel,
-                g.t_s,
-                g.recorded - g.bridged,
-                glitch::unit_of(g.channel),
-                g.run
-            )
-        })
-        .collect();
-    let more = glitches.len().saturating_sub(SHOWN);
+    let each = glitches.iter().map(|g| {
+        format!(
+            "{} {} at {:.4} s ({:+.4e} {} off the line, a run of {})",
+            g.file,
+            g.channel,
+            g.t_s,
+            g.recorded - g.bridged,
+            glitch::unit_of(g.channel),
+            g.run
+        )
+    });
     format!(
-        "{} glitched sample(s) bridged by the line between the samples that bound their run before the fits \
-         (the files are unchanged): {}{}",
+        "{} glitched sample(s) bridged by the line between the samples that bound their run \
+         before the fits (the files are unchanged): {}",
         glitches.len(),
-        each.join("; "),
-        if more > 0 {
-            format!("; and {more} more (`glitches` in --json)")
-        } else {
-            String::new()
-        }
+        first_few(each, glitches.len(), "glitches")
     )
 }
 

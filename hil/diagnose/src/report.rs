@@ -2,9 +2,7 @@
 //! with its figures (the plot that shows the cause, a held-out trial measured vs
 //! baseline vs extended, the ranking).
 
-use super::decide::FORCE_RESOLUTION_N;
 use super::effect::EffectKind;
-use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -429,30 +427,6 @@ pub fn convention(kind: EffectKind) -> Option<&'static str> {
         | EffectKind::GripCompliance
         | EffectKind::HandleMass => None,
     }
-}
-
-/// A named effect's parameters that the data cannot determine, each with why (empty
-/// when every one is determined): a friction's knee shapes its Coulomb force alone, so
-/// beside a Coulomb force below the rig's resolution (a viscous friction) it is
-/// whatever the folds put it at, and a lab should not read it.
-#[must_use]
-pub fn undetermined(
-    kind: EffectKind,
-    parameters: &BTreeMap<String, f64>,
-) -> BTreeMap<String, String> {
-    let mut out = BTreeMap::new();
-    if let (EffectKind::RailFriction, Some(fc)) = (kind, parameters.get("coulomb_n"))
-        && fc.abs() < FORCE_RESOLUTION_N
-    {
-        out.insert(
-            "smooth_velocity_m_per_s".to_string(),
-            format!(
-                "the knee of coulomb_n · tanh(v / knee) shapes the Coulomb force alone, \
-                 here {fc:.3} N, below the rig's {FORCE_RESOLUTION_N} N"
-            ),
-        );
-    }
-    out
 }
 
 /// The figure that shows the candidate `cf` at work.
@@ -991,38 +965,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
 
 #[cfg(test)]
 mod tests {
-    use super::{EffectKind, gain_bound, undetermined};
-
-    /// A friction's knee is flagged as undetermined beside a Coulomb force below the
-    /// rig's 0.25 N (a viscous friction), not beside one above it, and no other
-    /// effect's parameters are flagged.
-    #[test]
-    fn a_knee_beside_no_coulomb_force_is_undetermined() {
-        let friction = |fc: f64| {
-            [
-                ("coulomb_n".to_string(), fc),
-                ("viscous_n_s_per_m".to_string(), 2.0),
-                ("smooth_velocity_m_per_s".to_string(), 0.01),
-            ]
-            .into_iter()
-            .collect()
-        };
-        let flagged = undetermined(EffectKind::RailFriction, &friction(0.02));
-        assert_eq!(
-            flagged.keys().collect::<Vec<_>>(),
-            ["smooth_velocity_m_per_s"]
-        );
-        assert!(
-            flagged["smooth_velocity_m_per_s"].contains("0.020 N"),
-            "{flagged:?}"
-        );
-        assert_eq!(
-            undetermined(EffectKind::RailFriction, &friction(-0.1)).len(),
-            1
-        );
-        assert!(undetermined(EffectKind::RailFriction, &friction(0.3)).is_empty());
-        assert!(undetermined(EffectKind::HandleMass, &friction(0.0)).is_empty());
-    }
+    use super::gain_bound;
 
     /// The bound is `1 − f/b`: seed 1000's delay session (cart baseline 0.0454 over a
     /// floor of 0.0289) allows 36 %; a baseline at or under its floor allows nothing
