@@ -418,6 +418,7 @@ pub fn undetermined(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::candidate::gain_bounds;
 
     /// A friction's knee is flagged as undetermined beside a Coulomb force below the
     /// rig's 0.25 N (a viscous friction), not beside one above it, and no other
@@ -449,8 +450,6 @@ mod tests {
         assert!(undetermined(EffectKind::RailFriction, &friction(0.3)).is_empty());
         assert!(undetermined(EffectKind::HandleMass, &friction(0.0)).is_empty());
     }
-
-    use crate::candidate::gain_bounds;
 
     /// A friction at its softest knee (the last of 35) is at the edge while its Coulomb
     /// force is one the rig resolves (0.3 N), and not when it is not (a viscous

@@ -59,8 +59,9 @@
 //! speaks of the noise, not of a bias the model shares across folds.
 //!
 //! What a log holds that no model should fit: a sample no physics made (an encoder or
-//! sensor spike, a stale frame) is bridged by its neighbours before anything is fitted
-//! ([`super::glitch`]), and a cart-balance unit ten times the median unit's residual
+//! sensor spike, a stale frame, runs of up to three) is bridged before anything is
+//! fitted ([`super::glitch`]), a sample the logger lost while keeping its clock is put
+//! back ([`super::slip`]), and a cart-balance unit ten times the median unit's residual
 //! under the named causes' model on both of its measures (a trial the motors did not
 //! follow) is set aside and the cart balance judged again ([`faults`]).
 //!
@@ -75,10 +76,9 @@ use serde::Serialize;
 use super::bands::{BANDS_HZ, band_power};
 use super::candidate::{Baseline, Candidate, NUISANCE_COLUMNS, UnitResidual, still_noise_floor};
 use super::crossval::{CvFit, Folds, cross_validate};
-use super::decide::undetermined;
 use super::decide::{
     FORCE_RESOLUTION_N, MIN_EVIDENCE_R2, SessionScale, at_edge, at_gain_bound, evidence_r2,
-    immaterial, unbounded_grip,
+    immaterial, unbounded_grip, undetermined,
 };
 use super::delay::ActuationDelay;
 use super::effect::{Effect, EffectKind};
@@ -1434,7 +1434,7 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// Diagnoses a session: see the module docs.
 ///
 /// The phases: glitches (runs of one to three bad samples) in the measured channels bridged
-/// ([`glitch::bridge`]); the balance signals of every trial; the cart balance
+/// ([`glitch::bridge`]) and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
 /// balance (`rank_hand`, on the reading corrected by what the cart balance found about
 /// the sensor); the decision between the two balances (`decide`). Then the cart

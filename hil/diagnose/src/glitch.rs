@@ -20,6 +20,14 @@
 //!
 //! For one sample this is the lone spike's pattern: with `e_i = s`, its neighbours
 //! carry `−s/2` each, within `s/4`, and the samples two away less than `s/4`.
+//! A run of a constant offset (a stuck bit, a torn word) leaves the line exactly; a
+//! stale run (a logger repeating the last frame `L` times) during motion at speed `v`
+//! departs by `v·dt … L·v·dt`, and the line is what was read. Motion the rig can make
+//! has none of this: an acceleration, however sharp, bends the path outside the run as
+//! well as in it; a step (a missed encoder count burst, a re-tare) leaves the path bent
+//! at the bounding samples by half the run's smallest departure or more; a ringing
+//! sensor bends it at every sample. Each run is searched at the shortest length that
+//! explains it, and a run of constant offset fits no other length.
 //!
 //! **At a trial's first or last sample** a run has one bound. Its line is the one
 //! through that bound and the sample beyond it, extrapolated, and the path is checked
@@ -27,15 +35,7 @@
 //! departure (a glitch on the sample beyond the bound lends the run a departure four
 //! times the bend it leaves, so a quarter could not tell the two apart). A logger that
 //! opens a trial's file with the previous trial's last frame leaves such a run: 0.25 m
-//! from where the trial starts, it took the cart baseline's NRMSE from 0.039 to 0.505. A run of
-//! a constant offset (a stuck bit, a torn word) leaves the line exactly; a stale run (a
-//! logger repeating the last frame `L` times) during motion at speed `v` departs by
-//! `v·dt … L·v·dt`, and the line is what was read. Motion the rig can make has none of
-//! this: an acceleration, however sharp, bends the path outside the run as well as in
-//! it; a step (a missed encoder count burst, a re-tare) leaves the path bent at the
-//! bounding samples by half the run's smallest departure or more; a ringing sensor
-//! bends it at every sample. Each run is searched at the shortest length that explains
-//! it, and a run of constant offset fits no other length.
+//! from where the trial starts, it took the cart baseline's NRMSE from 0.039 to 0.505.
 //!
 //! **The threshold** is the largest of
 //! - [`ROBUST_SIGMAS`] times the channel's robust scale of `e` in the trial
@@ -108,12 +108,16 @@ pub struct Glitch {
     pub run: usize,
 }
 
+/// The floor of a glitch on a position channel, m (module docs); `super::slip` holds a
+/// lost sample's extra step to it too.
+pub const POSITION_FLOOR_M: f64 = 20e-6;
+
 /// The searched channels, each with the physical floor of a glitch on it in its unit
 /// (module docs): what a sensor measures. Not searched: time, and what the controller
 /// computes rather than measures (the motor command and the perturbation).
 pub const SEARCHED: [(&str, f64); 6] = [
-    ("x_m", 20e-6),
-    ("y_m", 20e-6),
+    ("x_m", POSITION_FLOOR_M),
+    ("y_m", POSITION_FLOOR_M),
     ("fx_n", 1.0),
     ("fy_n", 1.0),
     ("vx_m_per_s", 0.02),

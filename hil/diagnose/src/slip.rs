@@ -38,8 +38,6 @@ pub const RATIO: f64 = 1.0;
 /// How far the ratio may be from [`RATIO`]: the path's curvature over three samples
 /// and the noise move it little above the 20 µm floor.
 pub const RATIO_TOLERANCE: f64 = 0.25;
-/// The position's floor for a slip's extra step, m (the glitch rule's).
-pub const FLOOR_M: f64 = 20e-6;
 
 /// A sample lost by the logger, put back before the fits.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -68,7 +66,7 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, f64)> {
     // d[k] is the step into row k + 1.
     // Lone spikes in the step, inside the trial (the glitch rule's runs of one).
     let spikes = |d: &[f64]| -> Vec<usize> {
-        glitch::find(d, FLOOR_M)
+        glitch::find(d, glitch::POSITION_FLOOR_M)
             .into_iter()
             .filter(|&(k, len)| len == 1 && k >= 1 && k + 1 < d.len())
             .map(|(k, _)| k)
@@ -95,14 +93,10 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, f64)> {
 }
 
 /// The value of the sample lost between `v[i − 1]` and `v[i]`: the cubic through
-/// rows `i − 2 … i + 1` at their true times `−2, −1, +1, +2` (module docs), or the
-/// neighbours' mean where a trial's edge leaves fewer.
+/// rows `i − 2 … i + 1` at their true times `−2, −1, +1, +2` (module docs). [`find`]
+/// gives rows `2 ≤ i ≤ len − 2` only (its spikes in the step have both neighbours).
 fn lost_value(v: &[f64], i: usize) -> f64 {
-    if i >= 2 && i + 1 < v.len() {
-        (-v[i - 2] + 4.0 * v[i - 1] + 4.0 * v[i] - v[i + 1]) / 6.0
-    } else {
-        0.5 * (v[i - 1] + v[i])
-    }
+    (-v[i - 2] + 4.0 * v[i - 1] + 4.0 * v[i] - v[i + 1]) / 6.0
 }
 
 /// `trial` with a sample put back before each recorded row of `rows` (ascending), and
