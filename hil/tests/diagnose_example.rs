@@ -253,6 +253,58 @@ fn lost_samples_are_put_back_and_change_no_finding() {
     );
 }
 
+/// A position read at 500 Hz into the 1 kHz log (each encoder reading repeated on the
+/// next row, in every trial) is found held, its repeated rows are filled between the
+/// readings, and the findings are the clean session's: the cause, its parameters
+/// within 1 % (phases within 0.01 rad) and its gain within 0.005. Left held, the
+/// staircase took the ripple's x amplitude 12 % high and its y amplitude 9 % low
+/// (1.964 N and 1.602 N for 1.746 and 1.764; measured with the diagnosis before it
+/// filled held rows, `hil/docs/notes/2026-12-06-held-samples.md`).
+#[test]
+fn a_position_read_every_second_row_is_filled_and_changes_no_finding() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
+    let clean = Session::read(&dir).unwrap();
+    let c = diagnose(&clean, &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    assert!(c.held.is_empty(), "{:?}", c.held);
+
+    let mut s = clean.clone();
+    for t in &mut s.trials {
+        for v in [&mut t.x_m, &mut t.y_m] {
+            for k in (1..v.len()).step_by(2) {
+                v[k] = v[k - 1];
+            }
+        }
+    }
+    let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+    let held: Vec<_> = g
+        .held
+        .iter()
+        .map(|h| (h.channel, h.trials, h.rows_per_reading, h.reading_rate_hz))
+        .collect();
+    let n = s.trials.len();
+    assert_eq!(held, vec![("x_m", n, 2.0, 500.0), ("y_m", n, 2.0, 500.0)]);
+    assert!(g.glitches.is_empty(), "{:?}", g.glitches);
+    assert!(g.slips.is_empty(), "{:?}", g.slips);
+    assert_eq!(g.cause, c.cause);
+    for (k, v) in &c.parameters {
+        let w = g.parameters[k];
+        let tolerance = if k.ends_with("_rad") {
+            0.01
+        } else {
+            0.01 * v.abs()
+        };
+        assert!((w - v).abs() <= tolerance, "{k} {w} against {v}");
+    }
+    assert!(
+        (g.gain.unwrap() - c.gain.unwrap()).abs() < 0.005,
+        "gain {:?} against {:?}",
+        g.gain,
+        c.gain
+    );
+}
+
 /// A trial whose logged command the motors did not follow (trial 6's command zeroed
 /// over its second half, as a tripped amplifier whose controller kept logging would
 /// leave it) is set aside from the cart balance, and the findings are those of the

@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "f50a23143ab86e3e17dc2a4ee3d21fc69c645194e7927800e3554b1db05c6b34",
+        "1aff73075ce299f4a03bb6a0a1ab2b725dc23cd7de560c77dc4f97336344b368",
     ),
     (
         "example-friction",
-        "006ea41f1d2c0de70ff18a6e214d1e67edc474262a2e66cdf53ec05b959dc877",
+        "5378d319c2e79971046d8c481c0457a5c73743fe82b4fd171f4cbd01a8b59f54",
     ),
     (
         "example-nuisance",
-        "0e57ee4ea6ca50cee19474ff86e2cf07906249900a4c291adcb802dcbfbf26ac",
+        "cdc658816064c31e36ad1328ead7985ccd85c8f093e6252b32cad0a16dc71cf7",
     ),
     (
         "example-rotation-mass",
-        "e29afd6e99fa616069f833adc109854a00bd116b003186c16c49e3a55ccd1451",
+        "1651213636f6f496305a30c7baeb1760e86658debfbfc7808894377eb44de96b",
     ),
 ];
 

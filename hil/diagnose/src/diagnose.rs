@@ -92,6 +92,7 @@ use super::hand::{
 };
 use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settle_grip_load};
 use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
+use super::hold::{self, Held};
 use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
@@ -459,6 +460,11 @@ pub struct Diagnosis {
     /// before the fits; the files are unchanged. Empty for
     /// a clean log.
     pub glitches: Vec<Glitch>,
+    /// Channels the logger wrote faster than their sensor read them (`super::hold`):
+    /// each reading repeated for several rows, the held rows filled between the
+    /// readings before the fits (after the glitches are bridged); the files are
+    /// unchanged. Empty for a log whose channels are read at every row.
+    pub held: Vec<Held>,
     /// Samples the logger lost while keeping its clock (`super::slip`), found after the
     /// glitches are bridged and put back before the fits; the files are unchanged.
     /// Empty for a clean log.
@@ -1434,7 +1440,8 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// Diagnoses a session: see the module docs.
 ///
 /// The phases: glitches (runs of one to three bad samples) in the measured channels bridged
-/// ([`glitch::bridge`]) and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
+/// ([`glitch::bridge`]), the rows of channels held between their sensor's readings
+/// filled ([`hold::fill_session`]) and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
 /// balance (`rank_hand`, on the reading corrected by what the cart balance found about
 /// the sensor); the decision between the two balances (`decide`). Then the cart
@@ -1444,8 +1451,12 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
-    let (bridged, glitches) = glitch::bridge(session);
+    let held = hold::find(session);
+    let (bridged, glitches) = glitch::bridge(session, &held);
+    let recorded = session;
     let session = bridged.as_ref().unwrap_or(session);
+    let (filled, held) = hold::fill_session(recorded, session, &held);
+    let session = filled.as_ref().unwrap_or(session);
     let (repaired, slips) = slip::repair(session);
     let session = repaired.as_ref().unwrap_or(session);
     let (mut a, residuals) = diagnose_units(session, opts, &[])?;
@@ -1473,6 +1484,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         d.cart_set_aside = set_aside;
     }
     let d = &mut a.diagnosis;
+    if !held.is_empty() {
+        d.evidence.push(held_evidence(&held));
+    }
+    d.held = held;
     if !glitches.is_empty() {
         d.evidence.push(glitch_evidence(&glitches));
     }
@@ -1556,6 +1571,7 @@ fn diagnose_units(
         not_judged: Vec::new(),
         cart_set_aside: Vec::new(),
         glitches: Vec::new(),
+        held: Vec::new(),
         slips: Vec::new(),
         evidence: Vec::new(),
     };
@@ -1751,6 +1767,26 @@ fn slip_evidence(slips: &[Slip]) -> String {
          (every channel slips by one row there; the files are unchanged): {}",
         slips.len(),
         first_few(each, slips.len(), "slips")
+    )
+}
+
+/// The evidence sentence for the held channels: each with its reading rate, the
+/// trials it is held in and the rows filled.
+fn held_evidence(held: &[Held]) -> String {
+    let each: Vec<String> = held
+        .iter()
+        .map(|h| {
+            format!(
+                "{} read every {} rows ({:.0} Hz) in {} of {} trials, {} rows filled",
+                h.channel, h.rows_per_reading, h.reading_rate_hz, h.trials, h.judged, h.filled_rows
+            )
+        })
+        .collect();
+    format!(
+        "channels the logger wrote faster than their sensor read them, each reading \
+         repeated until the next: the repeated rows filled by the cubic through the \
+         readings around them before the fits (the files are unchanged): {}",
+        each.join("; ")
     )
 }
 

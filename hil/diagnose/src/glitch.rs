@@ -245,7 +245,7 @@ fn smallest_step(x: &[f64]) -> f64 {
 }
 
 /// The searched channel `name` of `trial`, mutable (`None` when the trial lacks it).
-fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mut Vec<f64>> {
+pub(crate) fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mut Vec<f64>> {
     match name {
         "x_m" => Some(&mut trial.x_m),
         "y_m" => Some(&mut trial.y_m),
@@ -259,9 +259,11 @@ fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mut Vec<f64>>
 
 /// The session with every glitch bridged, and the glitches, in trial and row order;
 /// `None` in place of the session when it has none (the caller keeps its own, and no
-/// trial is copied).
+/// trial is copied). `held` lists each trial's held channels ([`super::hold::find`]):
+/// on those the readings are searched, not the rows, a run counts readings, and every
+/// row that holds a bridged reading is bridged with it.
 #[must_use]
-pub fn bridge(session: &Session) -> (Option<Session>, Vec<Glitch>) {
+pub fn bridge(session: &Session, held: &[Vec<&'static str>]) -> (Option<Session>, Vec<Glitch>) {
     let mut found = Vec::new();
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
@@ -270,22 +272,32 @@ pub fn bridge(session: &Session) -> (Option<Session>, Vec<Glitch>) {
             let Some(x) = trial.column(channel) else {
                 continue;
             };
-            // No two runs come within two samples of each other (`find`), so each
+            // A held channel's readings and the rows each holds (every row otherwise).
+            let rows: Vec<usize> = if held.get(index).is_some_and(|c| c.contains(&channel)) {
+                super::hold::readings(x)
+            } else {
+                (0..x.len()).collect()
+            };
+            let values: Vec<f64> = rows.iter().map(|&r| x[r]).collect();
+            // No two runs come within two readings of each other (`find`), so each
             // bridge reads recorded values.
-            for (start, run) in find(x, floor) {
-                let line = line(x, start, run);
-                for (row, (&recorded, &t_s)) in
-                    x.iter().zip(&trial.t_s).enumerate().skip(start).take(run)
-                {
-                    found.push(Glitch {
-                        file: entry.file.clone(),
-                        channel,
-                        row,
-                        t_s,
-                        recorded,
-                        bridged: line(row),
-                        run,
-                    });
+            for (start, run) in find(&values, floor) {
+                let line = line(&values, start, run);
+                for k in start..start + run {
+                    let end = rows.get(k + 1).copied().unwrap_or(x.len());
+                    for (row, (&recorded, &t_s)) in
+                        x.iter().zip(&trial.t_s).enumerate().take(end).skip(rows[k])
+                    {
+                        found.push(Glitch {
+                            file: entry.file.clone(),
+                            channel,
+                            row,
+                            t_s,
+                            recorded,
+                            bridged: line(k),
+                            run,
+                        });
+                    }
                 }
             }
         }

@@ -7,6 +7,7 @@
 //! |---|---|
 //! | `effect.rs` | the catalog as types: [`EffectKind`] (names, sides) and [`Effect`] (parameters in the world's and the arm's types) |
 //! | `glitch.rs` | glitches (runs of one to three bad samples) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
+//! | `hold.rs` | channels the logger wrote faster than their sensor read them, each reading held for several rows: found, and the held rows filled between the readings before the fits ([`hold::Held`]) |
 //! | `slip.rs` | samples a logger lost while keeping its clock, found from the position and put back before the fits ([`slip::Slip`]) |
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
@@ -42,6 +43,7 @@ mod hand;
 mod hand_joint;
 mod hand_library;
 mod hand_signals;
+pub mod hold;
 mod joint;
 mod model;
 pub mod plots;

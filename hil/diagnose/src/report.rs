@@ -113,6 +113,13 @@ pub fn table(d: &Diagnosis) -> String {
             s.after_row
         );
     }
+    for h in &d.held {
+        let _ = writeln!(
+            out,
+            "held  {} read every {} rows ({:.0} Hz) in {} of {} trials: each reading repeated until the next, the repeated rows filled between the readings before the fits (`held` in --json)",
+            h.channel, h.rows_per_reading, h.reading_rate_hz, h.trials, h.judged
+        );
+    }
     if let Some(g) = d.glitches.first() {
         let _ = writeln!(
             out,
