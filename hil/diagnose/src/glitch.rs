@@ -259,11 +259,14 @@ pub(crate) fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mu
 
 /// The session with every glitch bridged, and the glitches, in trial and row order;
 /// `None` in place of the session when it has none (the caller keeps its own, and no
-/// trial is copied). `held` lists each trial's held channels ([`super::hold::find`]):
-/// on those the readings are searched, not the rows, a run counts readings, and every
-/// row that holds a bridged reading is bridged with it.
+/// trial is copied). `held` lists each trial's held channels with the rows of their
+/// readings (`hold::find`): on those the readings are searched, not the rows, a run
+/// counts readings, and every row that holds a bridged reading is bridged with it.
 #[must_use]
-pub fn bridge(session: &Session, held: &[Vec<&'static str>]) -> (Option<Session>, Vec<Glitch>) {
+pub fn bridge(
+    session: &Session,
+    held: &[Vec<(&'static str, Vec<usize>)>],
+) -> (Option<Session>, Vec<Glitch>) {
     let mut found = Vec::new();
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
@@ -273,11 +276,10 @@ pub fn bridge(session: &Session, held: &[Vec<&'static str>]) -> (Option<Session>
                 continue;
             };
             // A held channel's readings and the rows each holds (every row otherwise).
-            let rows: Vec<usize> = if held.get(index).is_some_and(|c| c.contains(&channel)) {
-                super::hold::readings(x)
-            } else {
-                (0..x.len()).collect()
-            };
+            let rows: Vec<usize> = held
+                .get(index)
+                .and_then(|c| c.iter().find(|(name, _)| *name == channel))
+                .map_or_else(|| (0..x.len()).collect(), |(_, rows)| rows.clone());
             let values: Vec<f64> = rows.iter().map(|&r| x[r]).collect();
             // No two runs come within two readings of each other (`find`), so each
             // bridge reads recorded values.

@@ -157,19 +157,25 @@ pub fn fill(v: &mut [f64], readings: &[usize]) -> usize {
     filled
 }
 
-/// The held channels of each trial of `session`, in trial order (module docs).
+/// Each trial's held channels, each with the rows of its readings ([`readings`]).
+pub type Readings = Vec<Vec<(&'static str, Vec<usize>)>>;
+
+/// The held channels of each trial of `session`, in trial order, each with the rows of
+/// its readings (module docs).
 #[must_use]
-pub fn find(session: &Session) -> Vec<Vec<&'static str>> {
+pub fn find(session: &Session) -> Readings {
     session.trials.iter().map(of_trial).collect()
 }
 
-/// The held channels of `trial` (module docs).
+/// The held channels of `trial`, each with the rows of its readings (module docs).
 #[must_use]
-pub fn of_trial(trial: &Trial) -> Vec<&'static str> {
+pub fn of_trial(trial: &Trial) -> Vec<(&'static str, Vec<usize>)> {
     glitch::SEARCHED
         .iter()
-        .filter(|(channel, _)| trial.column(channel).and_then(is_held) == Some(true))
-        .map(|(channel, _)| *channel)
+        .filter_map(|&(channel, _)| {
+            let x = trial.column(channel)?;
+            (is_held(x) == Some(true)).then(|| (channel, readings(x)))
+        })
         .collect()
 }
 
@@ -180,7 +186,7 @@ pub fn of_trial(trial: &Trial) -> Vec<&'static str> {
 pub fn fill_session(
     recorded: &Session,
     session: &Session,
-    held: &[Vec<&'static str>],
+    held: &Readings,
 ) -> (Option<Session>, Vec<Held>) {
     let mut copy: Option<Session> = None;
     let mut found: Vec<Held> = Vec::new();
@@ -193,13 +199,9 @@ pub fn fill_session(
         let mut intervals: Vec<f64> = Vec::new();
         let (mut trials, mut filled) = (0, 0);
         for (index, channels) in held.iter().enumerate() {
-            if !channels.contains(&channel) {
-                continue;
-            }
-            let Some(x) = recorded.trials[index].column(channel) else {
+            let Some((_, rows)) = channels.iter().find(|(c, _)| *c == channel) else {
                 continue;
             };
-            let rows = readings(x);
             let mut gaps: Vec<f64> = rows
                 .windows(2)
                 .map(|w| w[1] - w[0])
@@ -209,7 +211,7 @@ pub fn fill_session(
             intervals.push(upper_median(&mut gaps));
             let work = &mut copy.get_or_insert_with(|| session.clone()).trials[index];
             if let Some(values) = glitch::channel_mut(work, channel) {
-                filled += fill(values, &rows);
+                filled += fill(values, rows);
             }
             trials += 1;
         }
