@@ -192,35 +192,9 @@ fn lost_samples_are_put_back_and_change_no_finding() {
             .max_by(|&a, &b| speed(a).abs().total_cmp(&speed(b).abs()))
             .unwrap();
         let rate = 1.0 / (t.t_s[1] - t.t_s[0]);
-        let drop = |v: &mut Vec<f64>| {
+        every_column(t, |v| {
             v.remove(k);
-        };
-        for v in [
-            &mut t.x_m,
-            &mut t.y_m,
-            &mut t.fx_n,
-            &mut t.fy_n,
-            &mut t.pert_fx_n,
-            &mut t.pert_fy_n,
-        ] {
-            drop(v);
-        }
-        for v in [
-            &mut t.vx_m_per_s,
-            &mut t.vy_m_per_s,
-            &mut t.ref_x_m,
-            &mut t.ref_y_m,
-            &mut t.cmd_fx_n,
-            &mut t.cmd_fy_n,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            drop(v);
-        }
-        for column in &mut t.extra {
-            drop(&mut column.values);
-        }
+        });
         t.t_s.pop();
         assert!((t.t_s[1] - 1.0 / rate).abs() < 1e-12);
         want.push((s.manifest.trials[index].file.clone(), k - 1));
@@ -303,6 +277,79 @@ fn a_position_read_every_second_row_is_filled_and_changes_no_finding() {
         g.gain,
         c.gain
     );
+}
+
+/// Applies `f` to every column of `t` but the time.
+fn every_column(t: &mut rigtwin::session::Trial, f: impl Fn(&mut Vec<f64>)) {
+    for v in [
+        &mut t.x_m,
+        &mut t.y_m,
+        &mut t.fx_n,
+        &mut t.fy_n,
+        &mut t.pert_fx_n,
+        &mut t.pert_fy_n,
+    ] {
+        f(v);
+    }
+    for v in [
+        &mut t.vx_m_per_s,
+        &mut t.vy_m_per_s,
+        &mut t.ref_x_m,
+        &mut t.ref_y_m,
+        &mut t.cmd_fx_n,
+        &mut t.cmd_fy_n,
+    ]
+    .into_iter()
+    .flatten()
+    {
+        f(v);
+    }
+    for column in &mut t.extra {
+        f(&mut column.values);
+    }
+}
+
+/// Six frames written twice by the logger (at the drive velocity's peak in every third
+/// trial, every column; the time renumbered, every later row one period late) are found
+/// at their rows and taken out, and the findings are the clean session's exactly: the
+/// repeats are copies, so without them the trials are the recorded ones. Left in, they
+/// took the ripple's gain from 0.963 to 0.884 and its x amplitude 6 % low (1.636 N for
+/// 1.746; measured with the diagnosis before it took them out,
+/// `hil/docs/notes/2026-12-06-held-samples.md`).
+#[test]
+fn frames_written_twice_are_taken_out_and_change_no_finding() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
+    let clean = Session::read(&dir).unwrap();
+    let c = diagnose(&clean, &DiagnoseOptions::default())
+        .unwrap()
+        .diagnosis;
+    assert!(c.repeated_frames.is_empty(), "{:?}", c.repeated_frames);
+
+    let mut s = clean.clone();
+    let mut want = Vec::new();
+    for index in [0, 3, 6, 9, 12, 15] {
+        let t = &mut s.trials[index];
+        let speed = |k: usize| t.y_m[k + 1] - t.y_m[k - 1];
+        let k = (1..t.len() - 1)
+            .max_by(|&a, &b| speed(a).abs().total_cmp(&speed(b).abs()))
+            .unwrap();
+        every_column(t, |v| v.insert(k, v[k]));
+        let dt = t.t_s[1];
+        t.t_s.push(t.t_s.len() as f64 * dt);
+        want.push((s.manifest.trials[index].file.clone(), k + 1));
+    }
+    let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+    let got: Vec<_> = g
+        .repeated_frames
+        .iter()
+        .map(|r| (r.file.clone(), r.row))
+        .collect();
+    assert_eq!(got, want);
+    assert!(g.slips.is_empty(), "{:?}", g.slips);
+    assert!(g.glitches.is_empty(), "{:?}", g.glitches);
+    assert_eq!(g.cause, c.cause);
+    assert_eq!(g.parameters, c.parameters);
+    assert_eq!(g.gain, c.gain);
 }
 
 /// A trial whose logged command the motors did not follow (trial 6's command zeroed

@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "1aff73075ce299f4a03bb6a0a1ab2b725dc23cd7de560c77dc4f97336344b368",
+        "3d027b7c0c35982be1d985e1a196360c87e5a1f0b5d17c24996db6ed3d78db53",
     ),
     (
         "example-friction",
-        "5378d319c2e79971046d8c481c0457a5c73743fe82b4fd171f4cbd01a8b59f54",
+        "00fb1bb453bdb6b9ab1140317eeaab63dd1280e21799b1cc23a74c4e548f5d41",
     ),
     (
         "example-nuisance",
-        "cdc658816064c31e36ad1328ead7985ccd85c8f093e6252b32cad0a16dc71cf7",
+        "28f38c552d5f8756f9e17c436904a0b8853583097946e6249d089a66792579ce",
     ),
     (
         "example-rotation-mass",
-        "1651213636f6f496305a30c7baeb1760e86658debfbfc7808894377eb44de96b",
+        "79f8fd2b00fe95eff2773461b01731645ba7c35ccde67117c471745b91e838d4",
     ),
 ];
 

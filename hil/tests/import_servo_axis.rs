@@ -140,6 +140,12 @@ fn the_bench_log_imports_to_the_committed_session_and_is_identified() {
     // Its encoder counts repeat where the axis creeps, not at a fixed share of the
     // rows where it moves: no channel is taken for one held between readings.
     assert_eq!(d["held"].as_array().unwrap().len(), 0, "{}", d["held"]);
+    assert_eq!(
+        d["repeated_frames"].as_array().unwrap().len(),
+        0,
+        "{}",
+        d["repeated_frames"]
+    );
     // The written model carries every cause, the cogging on x alone, and the masses
     // fitted with the causes (none on the absent y axis).
     let m = rigtwin_diagnose::ExtendedModel::read(&model_file).unwrap();

@@ -45,7 +45,8 @@ fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 
 /// Generates and diagnoses a session, and asserts that no sample of it was taken for
 /// a glitch (`rigtwin_diagnose::glitch`), no row for a lost sample
-/// (`rigtwin_diagnose::slip`), no channel for one held between its sensor's readings
+/// or a frame written twice (`rigtwin_diagnose::slip`), no channel for one held
+/// between its sensor's readings
 /// (`rigtwin_diagnose::hold`) and no trial for a fault (`rigtwin_diagnose::faults`):
 /// the rig's physics, its sensor noise and
 /// encoder quantum, block means, every nuisance and every hidden effect, at every
@@ -56,6 +57,7 @@ fn run_design(effect: &str, seed: u64, design: &Design) -> (Generated, Diagnosis
     assert!(d.glitches.is_empty(), "{:?}", d.glitches);
     assert!(d.slips.is_empty(), "{:?}", d.slips);
     assert!(d.held.is_empty(), "{:?}", d.held);
+    assert!(d.repeated_frames.is_empty(), "{:?}", d.repeated_frames);
     assert!(d.cart_set_aside.is_empty(), "{:?}", d.cart_set_aside);
     (g, d)
 }

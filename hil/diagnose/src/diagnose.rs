@@ -97,7 +97,7 @@ use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
-use super::slip::{self, Slip};
+use super::slip::{self, Repeat, Slip};
 use super::stats::{jackknife_se, mean_sd, student_t_critical, upper_median};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
@@ -469,6 +469,10 @@ pub struct Diagnosis {
     /// glitches are bridged and put back before the fits; the files are unchanged.
     /// Empty for a clean log.
     pub slips: Vec<Slip>,
+    /// Frames the logger wrote twice (`super::slip`), every later row one period late:
+    /// taken out before the lost samples are looked for; the files are unchanged.
+    /// Empty for a clean log.
+    pub repeated_frames: Vec<Repeat>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
 }
@@ -1441,7 +1445,7 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 ///
 /// The phases: glitches (runs of one to three bad samples) in the measured channels bridged
 /// ([`glitch::bridge`]), the rows of channels held between their sensor's readings
-/// filled ([`hold::fill_session`]) and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
+/// filled ([`hold::fill_session`]), frames written twice taken out and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
 /// balance (`rank_hand`, on the reading corrected by what the cart balance found about
 /// the sensor); the decision between the two balances (`decide`). Then the cart
@@ -1451,13 +1455,13 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// # Errors
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
-    let held = hold::find(session);
-    let (bridged, glitches) = glitch::bridge(session, &held);
+    let readings = hold::find(session);
+    let (bridged, glitches) = glitch::bridge(session, &readings);
     let recorded = session;
     let session = bridged.as_ref().unwrap_or(session);
-    let (filled, held) = hold::fill_session(recorded, session, &held);
+    let (filled, held) = hold::fill_session(recorded, session, &readings);
     let session = filled.as_ref().unwrap_or(session);
-    let (repaired, slips) = slip::repair(session);
+    let (repaired, slips, repeats) = slip::repair(session, &readings);
     let session = repaired.as_ref().unwrap_or(session);
     let (mut a, residuals) = diagnose_units(session, opts, &[])?;
     let faults = faults(&residuals);
@@ -1492,6 +1496,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         d.evidence.push(glitch_evidence(&glitches));
     }
     d.glitches = glitches;
+    if !repeats.is_empty() {
+        d.evidence.push(repeat_evidence(&repeats));
+    }
+    d.repeated_frames = repeats;
     if !slips.is_empty() {
         d.evidence.push(slip_evidence(&slips));
     }
@@ -1573,6 +1581,7 @@ fn diagnose_units(
         glitches: Vec::new(),
         held: Vec::new(),
         slips: Vec::new(),
+        repeated_frames: Vec::new(),
         evidence: Vec::new(),
     };
     let plant_ok = signals.len() >= MIN_TRIALS;
@@ -1767,6 +1776,27 @@ fn slip_evidence(slips: &[Slip]) -> String {
          (every channel slips by one row there; the files are unchanged): {}",
         slips.len(),
         first_few(each, slips.len(), "slips")
+    )
+}
+
+/// The evidence sentence for the repeated frames taken out: how many, and the first
+/// few with file, row and time.
+fn repeat_evidence(repeats: &[Repeat]) -> String {
+    let each = repeats.iter().map(|r| {
+        format!(
+            "{} row {} ({:.4} s; the position was stepping {:.3} mm a row)",
+            r.file,
+            r.row,
+            r.t_s,
+            r.step_m * 1e3
+        )
+    });
+    format!(
+        "{} frame(s) the logger wrote twice taken out before the fits (the row repeats \
+         the one before in every measured channel while the handle moves; every later \
+         row was one period late; the files are unchanged): {}",
+        repeats.len(),
+        first_few(each, repeats.len(), "repeated_frames")
     )
 }
 

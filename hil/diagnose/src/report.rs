@@ -104,6 +104,15 @@ pub fn table(d: &Diagnosis) -> String {
             ids.join(", ")
         );
     }
+    if let Some(r) = d.repeated_frames.first() {
+        let _ = writeln!(
+            out,
+            "repeated frames  {} taken out (a logger that wrote a frame twice), the first {} row {} (all in the evidence and `repeated_frames` of --json)",
+            d.repeated_frames.len(),
+            r.file,
+            r.row
+        );
+    }
     if let Some(s) = d.slips.first() {
         let _ = writeln!(
             out,

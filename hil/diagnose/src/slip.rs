@@ -27,11 +27,31 @@
 //! the time column is renumbered. The files are never changed; [`Slip`] lists each one
 //! with its trial's file and the recorded row after which the sample was lost. Rows in
 //! [`super::glitch::Glitch`] are the file's, and found before the repair.
+//!
+//! **A frame written twice.** A logger whose clock runs a little slower than the rig's
+//! loses a frame now and then; one whose clock runs a little faster writes a frame
+//! twice, and every later row is one period late. Such a row repeats the row before
+//! exactly in every measured channel (position, force, drive velocity), which a rig
+//! read at every row never does while it moves: its force sensor's noise changes the
+//! force at every row. A repeated frame is a row that repeats the row before in every
+//! measured channel while the faster position channel steps by at least 20 µm into
+//! the row before and out of the row, the same way. It is taken out of every column
+//! before the lost samples are looked for, and the time is renumbered; [`Repeat`] lists
+//! each with its file's row. A logger that wrote the previous frame in place of a lost
+//! one (a stale frame) leaves, once the repeat is out, a lost sample, which is then put
+//! back: the same repair as for the two faults one after the other. Seven repeated
+//! frames at peak speed in a session of 32 trials did what seven lost ones did: two
+//! good trials set aside and a 1.6 ms delay's held-out gain from 0.34 to 0.22
+//! (`hil/docs/notes/2026-12-06-held-samples.md`). A trial with a held channel
+//! ([`super::hold`]) repeats by design and is not searched, nor is a trial without a
+//! force sensor (constant force columns: nothing tells a repeat from a stalled
+//! encoder), nor a frame repeated at rest, which moves no fit.
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
 
 use super::glitch;
+use super::hold::Readings;
 
 /// The lost sample's step over its neighbours' mean step: one (the step doubles).
 pub const RATIO: f64 = 1.0;
@@ -51,6 +71,59 @@ pub struct Slip {
     pub t_s: f64,
     /// The position's extra step there (the faster channel's), m.
     pub step_m: f64,
+}
+
+/// A frame the logger wrote twice, taken out before the fits.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Repeat {
+    /// The trial's file, as the manifest names it.
+    pub file: String,
+    /// The recorded row that repeats the one before it (0 for the first after the
+    /// header).
+    pub row: usize,
+    /// That row's time in its trial as recorded, s.
+    pub t_s: f64,
+    /// The faster position channel's mean step into the row before and out of the
+    /// row, m.
+    pub step_m: f64,
+}
+
+/// The rows `k` of `trial` that repeat row `k − 1` in every measured channel while the
+/// faster position channel steps by at least [`glitch::POSITION_FLOOR_M`] into row
+/// `k − 1` and out of row `k`, the same way (module docs), each with that mean step.
+#[must_use]
+pub fn find_repeats(trial: &Trial) -> Vec<(usize, f64)> {
+    let varies = |c: &[f64]| c.iter().any(|v| *v != c[0]);
+    // Without a force sensor (its columns constant, as an imported servo axis logs
+    // them) a repeat has nothing to be told apart by.
+    if !varies(&trial.fx_n) && !varies(&trial.fy_n) {
+        return Vec::new();
+    }
+    let columns: Vec<&[f64]> = glitch::SEARCHED
+        .iter()
+        .filter_map(|(channel, _)| trial.column(channel))
+        .collect();
+    let (x, y) = (&trial.x_m, &trial.y_m);
+    let n = x.len().min(y.len());
+    let mut rows = Vec::new();
+    for k in 2..n.saturating_sub(1) {
+        if !columns.iter().all(|c| c[k] == c[k - 1]) {
+            continue;
+        }
+        let steps = |p: &[f64]| (p[k - 1] - p[k - 2], p[k + 1] - p[k]);
+        let (ax, bx) = steps(x);
+        let (ay, by) = steps(y);
+        let (a, b) = if (ax + bx).abs() >= (ay + by).abs() {
+            (ax, bx)
+        } else {
+            (ay, by)
+        };
+        let floor = glitch::POSITION_FLOOR_M;
+        if a.abs() >= floor && b.abs() >= floor && a.signum() == b.signum() {
+            rows.push((k, 0.5 * (a + b).abs()));
+        }
+    }
+    rows
 }
 
 /// The recorded rows `i` of a trial such that a sample was lost between `i − 1` and
@@ -114,27 +187,32 @@ fn repaired(trial: &Trial, rows: &[usize], period_s: f64) -> Trial {
         }
         out
     };
-    let fill_opt = |v: &Option<Vec<f64>>| v.as_deref().map(fill);
+    each_column(trial, fill, period_s)
+}
+
+/// Every column of `trial` with `f` applied, the time renumbered at `period_s`.
+fn each_column(trial: &Trial, f: impl Fn(&[f64]) -> Vec<f64>, period_s: f64) -> Trial {
+    let f_opt = |v: &Option<Vec<f64>>| v.as_deref().map(&f);
     let mut t = Trial {
         t_s: Vec::new(),
-        x_m: fill(&trial.x_m),
-        y_m: fill(&trial.y_m),
-        fx_n: fill(&trial.fx_n),
-        fy_n: fill(&trial.fy_n),
-        pert_fx_n: fill(&trial.pert_fx_n),
-        pert_fy_n: fill(&trial.pert_fy_n),
-        vx_m_per_s: fill_opt(&trial.vx_m_per_s),
-        vy_m_per_s: fill_opt(&trial.vy_m_per_s),
-        ref_x_m: fill_opt(&trial.ref_x_m),
-        ref_y_m: fill_opt(&trial.ref_y_m),
-        cmd_fx_n: fill_opt(&trial.cmd_fx_n),
-        cmd_fy_n: fill_opt(&trial.cmd_fy_n),
+        x_m: f(&trial.x_m),
+        y_m: f(&trial.y_m),
+        fx_n: f(&trial.fx_n),
+        fy_n: f(&trial.fy_n),
+        pert_fx_n: f(&trial.pert_fx_n),
+        pert_fy_n: f(&trial.pert_fy_n),
+        vx_m_per_s: f_opt(&trial.vx_m_per_s),
+        vy_m_per_s: f_opt(&trial.vy_m_per_s),
+        ref_x_m: f_opt(&trial.ref_x_m),
+        ref_y_m: f_opt(&trial.ref_y_m),
+        cmd_fx_n: f_opt(&trial.cmd_fx_n),
+        cmd_fy_n: f_opt(&trial.cmd_fy_n),
         extra: trial
             .extra
             .iter()
             .map(|c| rigtwin_session::Column {
                 name: c.name.clone(),
-                values: fill(&c.values),
+                values: f(&c.values),
             })
             .collect(),
     };
@@ -142,30 +220,91 @@ fn repaired(trial: &Trial, rows: &[usize], period_s: f64) -> Trial {
     t
 }
 
-/// The session with every lost sample put back, and the slips, in trial and row
-/// order; `None` in place of the session when it has none (the caller keeps its own).
+/// `trial` without the rows `rows` (ascending), its time renumbered at `period_s`.
+fn without(trial: &Trial, rows: &[usize], period_s: f64) -> Trial {
+    let drop = |v: &[f64]| -> Vec<f64> {
+        v.iter()
+            .enumerate()
+            .filter(|(k, _)| rows.binary_search(k).is_err())
+            .map(|(_, &x)| x)
+            .collect()
+    };
+    each_column(trial, drop, period_s)
+}
+
+/// The file's row of row `row` of a trial from which the file's rows `removed`
+/// (ascending) were taken out.
+fn file_row(removed: &[usize], row: usize) -> usize {
+    removed
+        .iter()
+        .fold(row, |r, &gone| if gone <= r { r + 1 } else { r })
+}
+
+/// What [`mend`] did to a trial: the file's rows of its repeated frames and of the
+/// rows after which samples were lost, each with its step.
+type Mended = (Vec<(usize, f64)>, Vec<(usize, f64)>);
+
+/// `trial` with its repeated frames taken out (when `search_repeats`) and its lost
+/// samples put back, time renumbered at `period_s` (`None` when it has neither), and
+/// the file's rows of each (module docs).
+fn mend(trial: &Trial, search_repeats: bool, period_s: f64) -> (Option<Trial>, Mended) {
+    let twice = if search_repeats {
+        find_repeats(trial)
+    } else {
+        Vec::new()
+    };
+    let removed: Vec<usize> = twice.iter().map(|r| r.0).collect();
+    let kept;
+    let work = if removed.is_empty() {
+        trial
+    } else {
+        kept = without(trial, &removed, period_s);
+        &kept
+    };
+    let rows = find(&work.x_m, &work.y_m);
+    let lost: Vec<(usize, f64)> = rows
+        .iter()
+        .map(|&(row, step)| (file_row(&removed, row - 1), step))
+        .collect();
+    let mended = if rows.is_empty() && removed.is_empty() {
+        None
+    } else {
+        let at: Vec<usize> = rows.iter().map(|r| r.0).collect();
+        Some(repaired(work, &at, period_s))
+    };
+    (mended, (twice, lost))
+}
+
+/// The session with every repeated frame taken out and every lost sample put back
+/// (module docs), the slips and the repeats, each in trial and row order, with the
+/// file's rows; `None` in place of the session when it has neither (the caller keeps
+/// its own). Trials with a held channel (`held`, from [`super::hold::find`]) are not
+/// searched for repeats.
 #[must_use]
-pub fn repair(session: &Session) -> (Option<Session>, Vec<Slip>) {
+pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Vec<Slip>, Vec<Repeat>) {
     let period_s = 1.0 / session.manifest.rate_hz;
-    let mut found = Vec::new();
+    let (mut slips, mut repeats) = (Vec::new(), Vec::new());
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
-        let rows = find(&trial.x_m, &trial.y_m);
-        if rows.is_empty() {
-            continue;
+        let search = held.get(index).is_none_or(Vec::is_empty);
+        let (mended, (twice, lost)) = mend(trial, search, period_s);
+        repeats.extend(twice.into_iter().map(|(row, step_m)| Repeat {
+            file: entry.file.clone(),
+            row,
+            t_s: trial.t_s[row],
+            step_m,
+        }));
+        slips.extend(lost.into_iter().map(|(after_row, step_m)| Slip {
+            file: entry.file.clone(),
+            after_row,
+            t_s: trial.t_s[after_row],
+            step_m,
+        }));
+        if let Some(t) = mended {
+            copy.get_or_insert_with(|| session.clone()).trials[index] = t;
         }
-        for &(row, step_m) in &rows {
-            found.push(Slip {
-                file: entry.file.clone(),
-                after_row: row - 1,
-                t_s: trial.t_s[row - 1],
-                step_m,
-            });
-        }
-        let at: Vec<usize> = rows.iter().map(|r| r.0).collect();
-        copy.get_or_insert_with(|| session.clone()).trials[index] = repaired(trial, &at, period_s);
     }
-    (copy, found)
+    (copy, slips, repeats)
 }
 
 #[cfg(test)]
@@ -254,5 +393,99 @@ mod tests {
             *v += y[300] - y[299];
         }
         assert!(find(&x, &one).is_empty());
+    }
+
+    /// A trial of `x, y` and a force of 0.05 N of noise on each axis, as a rig read at
+    /// every row records it.
+    fn trial_of(x: Vec<f64>, y: Vec<f64>, seed: u64) -> Trial {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = Normal::new(0.0, 0.05).unwrap();
+        let n = x.len();
+        let mut force = || (0..n).map(|_| noise.sample(&mut rng)).collect::<Vec<f64>>();
+        Trial {
+            t_s: (0..n).map(|k| k as f64 * 1e-3).collect(),
+            fx_n: force(),
+            fy_n: force(),
+            pert_fx_n: vec![0.0; n],
+            pert_fy_n: vec![0.0; n],
+            x_m: x,
+            y_m: y,
+            ..Trial::default()
+        }
+    }
+
+    /// `t` with row `k` written twice in every column, as a logger whose clock ran
+    /// ahead writes it; the time renumbered.
+    fn written_twice(t: &Trial, k: usize) -> Trial {
+        let twice = |v: &[f64]| {
+            let mut out = v.to_vec();
+            out.insert(k, v[k]);
+            out
+        };
+        each_column(t, twice, 1e-3)
+    }
+
+    #[test]
+    fn a_frame_written_twice_is_taken_out_and_the_trial_is_the_clean_one() {
+        for seed in 0..10 {
+            let (x, y) = reach(seed, 2000);
+            let clean = trial_of(x, y, seed);
+            assert!(find_repeats(&clean).is_empty(), "seed {seed}");
+            let twice = written_twice(&written_twice(&clean, 300), 151);
+            let found: Vec<usize> = find_repeats(&twice).iter().map(|r| r.0).collect();
+            assert_eq!(found, vec![152, 302], "seed {seed}");
+            let (fixed, (repeats, slips)) = mend(&twice, true, 1e-3);
+            assert!(slips.is_empty(), "seed {seed}: {slips:?}");
+            assert_eq!(repeats.len(), 2);
+            // Exactly the clean trial: the repeats are copies, so taking them out
+            // leaves the recorded rows.
+            assert_eq!(fixed.unwrap(), clean, "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn a_stale_frame_is_a_repeat_and_a_lost_sample_and_is_mended_as_both() {
+        // The logger wrote row 299 again in place of row 300 (lost): the repeat is
+        // taken out, and the sample it hid is put back by the cubic, within 2 µm of the
+        // clean one (the lost-sample test's tolerance), and counted in the file's rows.
+        for seed in 0..10 {
+            let (x, y) = reach(seed, 2000);
+            let clean = trial_of(x, y, seed);
+            let mut stale = clean.clone();
+            stale.x_m[300] = stale.x_m[299];
+            stale.y_m[300] = stale.y_m[299];
+            stale.fx_n[300] = stale.fx_n[299];
+            stale.fy_n[300] = stale.fy_n[299];
+            let (fixed, (repeats, slips)) = mend(&stale, true, 1e-3);
+            let t = fixed.unwrap();
+            assert_eq!(repeats.iter().map(|r| r.0).collect::<Vec<_>>(), vec![300]);
+            assert_eq!(slips.iter().map(|s| s.0).collect::<Vec<_>>(), vec![299]);
+            assert_eq!(t.len(), 2000);
+            assert!((t.y_m[300] - clean.y_m[300]).abs() < 2e-6, "seed {seed}");
+            assert!((t.x_m[300] - clean.x_m[300]).abs() < 2e-6, "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn rows_that_repeat_at_rest_or_in_one_channel_are_not_repeats() {
+        let (x, y) = reach(7, 2000);
+        let clean = trial_of(x, y, 7);
+        // At rest (before the reach): a repeat there moves no fit and is left.
+        assert!(find_repeats(&written_twice(&clean, 20)).is_empty());
+        // The position repeating at peak speed with the force changing is not a frame
+        // written twice (it is a stale encoder read, the glitch rule's).
+        let mut one = clean.clone();
+        one.y_m[300] = one.y_m[299];
+        one.x_m[300] = one.x_m[299];
+        assert!(find_repeats(&one).is_empty());
+        // Without a force sensor (constant force columns) nothing is searched.
+        let mut no_sensor = written_twice(&clean, 300);
+        no_sensor.fx_n.iter_mut().for_each(|v| *v = 0.0);
+        no_sensor.fy_n.iter_mut().for_each(|v| *v = 0.0);
+        assert!(find_repeats(&no_sensor).is_empty());
+        // Found at peak speed, but a trial with a held channel is not searched.
+        let twice = written_twice(&clean, 300);
+        assert_eq!(mend(&twice, true, 1e-3).1.0.len(), 1);
+        assert!(mend(&twice, false, 1e-3).1.0.is_empty());
     }
 }
