@@ -19,7 +19,7 @@
 //! channel is held in a trial when at least [`MIN_MOVING`] such rows exist, at least
 //! [`HELD_SHARE`] of them repeat the row before exactly, and at most
 //! [`CHANGED_TWICE_SHARE`] change at both it and the row before. Measured: repeats at 0
-//! to 0.12 on every channel of 120 of the generator's realistic sessions and of the
+//! to 0.12 on every channel of 114 of the generator's realistic sessions and of the
 //! independent rig's; 0.5 to 0.75 held for two to four rows, with no row changing
 //! twice. The second test is for a quiet channel: on the generator's noise-free rig, the
 //! drive velocity of an axis the reach does not use rests at exactly zero between

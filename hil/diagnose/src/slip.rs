@@ -38,8 +38,10 @@
 //! the row before and out of the row, the same way. It is taken out of every column
 //! before the lost samples are looked for, and the time is renumbered; [`Repeat`] lists
 //! each with its file's row. A logger that wrote the previous frame in place of a lost
-//! one (a stale frame) leaves, once the repeat is out, a lost sample, which is then put
-//! back: the same repair as for the two faults one after the other. Seven repeated
+//! one (a stale frame) is, where the handle moves, bridged by [`super::glitch`] first:
+//! its position leaves the line between its neighbours. One the glitch rule leaves
+//! (below its threshold) is taken out here, which leaves a lost sample, put back next:
+//! the repair of the two faults one after the other. Seven repeated
 //! frames at peak speed in a session of 32 trials did what seven lost ones did: two
 //! good trials set aside and a 1.6 ms delay's held-out gain from 0.34 to 0.22
 //! (`hil/docs/notes/2026-12-06-held-samples.md`). A trial with a held channel
