@@ -68,6 +68,8 @@
 //! sample with the trial's file, the channel and the time so that a person can look.
 //! Runs longer than [`MAX_RUN`] are left as recorded.
 
+use std::borrow::Cow;
+
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
 
@@ -276,26 +278,30 @@ pub fn bridge(
                 continue;
             };
             // A held channel's readings and the rows each holds (every row otherwise).
-            let rows: Vec<usize> = held
+            let readings: Option<&[usize]> = held
                 .get(index)
                 .and_then(|c| c.iter().find(|(name, _)| *name == channel))
-                .map_or_else(|| (0..x.len()).collect(), |(_, rows)| rows.clone());
-            let values: Vec<f64> = rows.iter().map(|&r| x[r]).collect();
+                .map(|(_, rows)| rows.as_slice());
+            let values: Cow<[f64]> = readings.map_or(Cow::Borrowed(x), |rows| {
+                Cow::Owned(rows.iter().map(|&r| x[r]).collect())
+            });
+            // The rows reading `k` holds.
+            let held_by = |k: usize| match readings {
+                Some(rows) => rows[k]..rows.get(k + 1).copied().unwrap_or(x.len()),
+                None => k..k + 1,
+            };
             // No two runs come within two readings of each other (`find`), so each
             // bridge reads recorded values.
             for (start, run) in find(&values, floor) {
                 let line = line(&values, start, run);
                 for k in start..start + run {
-                    let end = rows.get(k + 1).copied().unwrap_or(x.len());
-                    for (row, (&recorded, &t_s)) in
-                        x.iter().zip(&trial.t_s).enumerate().take(end).skip(rows[k])
-                    {
+                    for row in held_by(k) {
                         found.push(Glitch {
                             file: entry.file.clone(),
                             channel,
                             row,
-                            t_s,
-                            recorded,
+                            t_s: trial.t_s[row],
+                            recorded: x[row],
                             bridged: line(k),
                             run,
                         });

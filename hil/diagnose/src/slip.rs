@@ -288,7 +288,7 @@ pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Vec<Slip>
     let (mut slips, mut repeats) = (Vec::new(), Vec::new());
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
-        let search = held.get(index).is_none_or(Vec::is_empty);
+        let search = held.held.get(index).is_none_or(Vec::is_empty);
         let (mended, (twice, lost)) = mend(trial, search, period_s);
         repeats.extend(twice.into_iter().map(|(row, step_m)| Repeat {
             file: entry.file.clone(),
