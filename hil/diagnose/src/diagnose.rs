@@ -1456,7 +1456,8 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 /// A [`DiscrepancyError`] when a trial cannot be smoothed or a fit is singular.
 pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, DiscrepancyError> {
     let readings = hold::find(session);
-    let (bridged, glitches) = glitch::bridge(session, &readings.held);
+    let (bridged, glitches) =
+        glitch::bridge(session, |trial, channel| readings.rows(trial, channel));
     let session = bridged.as_ref().unwrap_or(session);
     let (filled, held) = hold::fill_session(session, &readings);
     let session = filled.as_ref().unwrap_or(session);

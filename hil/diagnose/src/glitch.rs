@@ -261,13 +261,13 @@ pub(crate) fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mu
 
 /// The session with every glitch bridged, and the glitches, in trial and row order;
 /// `None` in place of the session when it has none (the caller keeps its own, and no
-/// trial is copied). `held` lists each trial's held channels with the rows of their
-/// readings (`hold::find`): on those the readings are searched, not the rows, a run
+/// trial is copied). `held` gives, for a trial's index and a channel, the rows of its
+/// readings if it is held there (`hold::find`): on those the readings are searched, not the rows, a run
 /// counts readings, and every row that holds a bridged reading is bridged with it.
 #[must_use]
-pub fn bridge(
+pub fn bridge<'a>(
     session: &Session,
-    held: &[Vec<(&'static str, Vec<usize>)>],
+    held: impl Fn(usize, &'static str) -> Option<&'a [usize]>,
 ) -> (Option<Session>, Vec<Glitch>) {
     let mut found = Vec::new();
     let mut copy: Option<Session> = None;
@@ -278,10 +278,7 @@ pub fn bridge(
                 continue;
             };
             // A held channel's readings and the rows each holds (every row otherwise).
-            let readings: Option<&[usize]> = held
-                .get(index)
-                .and_then(|c| c.iter().find(|(name, _)| *name == channel))
-                .map(|(_, rows)| rows.as_slice());
+            let readings = held(index, channel);
             let values: Cow<[f64]> = readings.map_or(Cow::Borrowed(x), |rows| {
                 Cow::Owned(rows.iter().map(|&r| x[r]).collect())
             });
@@ -324,6 +321,7 @@ pub fn bridge(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reaches;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, Normal};
@@ -333,14 +331,7 @@ mod tests {
     /// samples by 2 µm.
     fn reach(seed: u64) -> Vec<f64> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let noise = Normal::new(0.0, 0.3e-6).unwrap();
-        (0..2000)
-            .map(|i| {
-                let tau = (f64::from(i) * 1e-3 / 0.6).clamp(0.0, 1.0);
-                let p = 10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5);
-                0.25 * p + noise.sample(&mut rng)
-            })
-            .collect()
+        reaches::noisy(&mut rng, 0.25, 0.0, (0..2000).map(f64::from))
     }
 
     /// `x` with white noise of `sd` added: a recorded channel's fine noise, which keeps

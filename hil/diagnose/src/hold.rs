@@ -24,25 +24,34 @@
 //! twice. The second test is for a quiet channel: on the generator's noise-free rig, the
 //! drive velocity of an axis the reach does not use rests at exactly zero between
 //! bursts of change, repeating at 0.44 of its moving rows, but changes twice in a row at
-//! 0.48. A sensor read faster than every second row (a clock between once and twice the
-//! logger's period, each reading shown for one row or two) repeats at `1 − 1/P` of the
-//! moving rows, `P` its period in rows, and changes twice in a row often; it is held
-//! when at least [`SPARSE_HELD_SHARE`] of its moving rows repeat and its readings lie
-//! on a clock: a clock's readings land on rows `ceil(t₀ + k·P)`, so any
-//! [`CLOCK_WINDOW`] consecutive ones span within a row of [`CLOCK_WINDOW`]` · P`,
-//! where repeats that fall anywhere (a channel's count standing still at a slow
-//! moment) spread their spans by more. Sparser repeats (a sensor within 15 % of the
-//! logger's rate) are left to the glitch rule, one at a time. A channel that never
-//! moves (an imported single-axis log's zero columns) has no quantum and is not held.
-//! The readings are the rows where the value changes (and the first row).
+//! 0.48.
+//!
+//! A sensor read faster than every second row (a clock of period `P` between one and
+//! two rows, each reading shown for one row or two) repeats at only `1 − 1/P` of the
+//! rows, and changes twice in a row often. It is held when its repeats on **fast
+//! rows** (where it moves by at least [`FAST_QUANTA_PER_ROW`] of its smallest step per
+//! row) lie on a clock: such a clock falls behind the rows once every `P/(P − 1)` rows,
+//! and its repeats land there, so the spacings between them take the two whole numbers
+//! around that; at least [`ON_CLOCK_SHARE`] of at least [`MIN_WRAPS`] spacings lie
+//! within a row of their mean. A channel read at every row does not repeat on its fast
+//! rows at all, or (a drive velocity whose count stands still now and then) at
+//! geometric spacings: at most 0.18 of them within a row of their mean on the 114
+//! realistic sessions and the shared ones. The same test holds a sensor read every second row or slower, so the two
+//! rules overlap. A clock so near the logger's rate that fewer than [`MIN_WRAPS`]
+//! spacings fall on a trial's fast rows is not judged held in that trial (at 980 Hz,
+//! the slower axis of many of the generator's trials). A channel that never moves (an
+//! imported single-axis log's zero columns) has no quantum and is not held. The
+//! readings are the rows where the value changes (and the first row); the clock's
+//! period is the least-squares slope of their rows on their count over fast rows,
+//! where none can equal the one before unseen.
 //!
 //! **The fill.** A reading taken at time `t` appears at row `ceil(t)`. Where the
 //! sensor's clock is not an exact fraction of the logger's (a reading held for one row
 //! or two, or two or three, in turn), what part of a row each reading is late varies
 //! from reading to reading, by up to a row (at peak speed, 0.8 mm of a reach); where it is (500 Hz into 1 kHz),
 //! by nothing. So each reading is put at its time on the sensor's clock
-//! ([`reading_times`]): the clock's period found from the runs of readings, and each
-//! reading's time from the rows of its neighbours, to within `1/(2q)` of a row for a
+//! ([`reading_times`]): each reading's time from the rows of its neighbours and the
+//! clock's period, to within `1/(2q)` of a row for a
 //! period of `p/q` rows (a tenth at 625 Hz into 1 kHz). A clock at exactly a whole
 //! multiple of the logger's period (500 Hz into 1 kHz) leaves the part of a row
 //! unknown, the same for every reading, and each reading keeps the row it shows on. Every row from a reading to the next, the
@@ -85,15 +94,19 @@ pub const HELD_SHARE: f64 = 0.4;
 /// readings at least two rows apart never do (but where two clocks jitter); a quiet
 /// channel resting at exactly one value between bursts of change does at about half.
 pub const CHANGED_TWICE_SHARE: f64 = 0.1;
-/// The share of moving rows that repeat the row before exactly, at least, for a sensor
-/// read faster than every second row, whose readings must also lie on a clock
-/// (module docs): a sensor at 850 Hz in a 1 kHz log repeats at 0.15.
-pub const SPARSE_HELD_SHARE: f64 = 0.15;
-/// The readings over which a clock's regularity is judged.
-pub const CLOCK_WINDOW: usize = 20;
-/// The share of windows of [`CLOCK_WINDOW`] readings that must span within a row of the
-/// clock's, at least.
-pub const ON_CLOCK_SHARE: f64 = 0.95;
+/// A row is fast when the channel's range over the [`WINDOW`] rows either side is at
+/// least this many of its smallest recorded steps per row: a channel read at every row
+/// then changes at every fast row (measured: no position or force of 114 realistic
+/// sessions repeats on its fast rows more than a few times a trial, and those few
+/// irregularly).
+pub const FAST_QUANTA_PER_ROW: f64 = 16.0;
+/// The fewest spacings between repeats on fast rows by which a sensor's clock is judged.
+pub const MIN_WRAPS: usize = 10;
+/// The share of spacings between repeats on fast rows within a row of their mean, at
+/// least, for a sensor's clock: a clock's are all (its repeats land where its readings
+/// fall behind the rows, every `P/(P − 1)` rows); a channel read at every row whose
+/// count stands still now and then has geometric spacings, 0.18 at most measured.
+pub const ON_CLOCK_SHARE: f64 = 0.9;
 /// The longest hold filled, rows: longer, the channel is at rest.
 pub const MAX_HOLD: usize = 8;
 
@@ -116,12 +129,25 @@ pub struct Held {
     pub filled_rows: usize,
 }
 
-/// Whether `x` is held (module docs): `None` when it has fewer than [`MIN_MOVING`]
-/// moving rows; else whether at least [`HELD_SHARE`] of them repeat the row before and
-/// at most [`CHANGED_TWICE_SHARE`] change twice in a row, or at least
-/// [`SPARSE_HELD_SHARE`] repeat and its readings lie on a sensor's clock (module docs).
+/// What [`judge`] finds a channel to be.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Judged {
+    /// Read at every row.
+    EveryRow,
+    /// Held between the readings of a sensor whose clock's period is `period` rows.
+    Held {
+        /// The clock's period, rows: the least-squares slope of the readings' rows on
+        /// their count over runs of fast rows (moving rows if too few are fast).
+        period: f64,
+    },
+}
+
+/// What `x` is (module docs): `None` when it has fewer than [`MIN_MOVING`] moving rows;
+/// else held when at least [`HELD_SHARE`] of them repeat the row before and at most
+/// [`CHANGED_TWICE_SHARE`] change twice in a row, or when its repeats on fast rows lie
+/// on a sensor's clock ([`MIN_WRAPS`], [`ON_CLOCK_SHARE`]).
 #[must_use]
-pub fn is_held(x: &[f64]) -> Option<bool> {
+pub fn judge(x: &[f64]) -> Option<Judged> {
     let n = x.len();
     if n < 2 * WINDOW + 2 {
         return None;
@@ -134,14 +160,16 @@ pub fn is_held(x: &[f64]) -> Option<bool> {
     if !quantum.is_finite() {
         return None;
     }
-    let least = QUANTA_PER_ROW * (2 * WINDOW) as f64 * quantum;
+    let per_row = |quanta: f64| quanta * (2 * WINDOW) as f64 * quantum;
     let mut moving = vec![false; n];
+    let mut fast = vec![false; n];
     let (mut count, mut repeats, mut twice) = (0usize, 0usize, 0usize);
     for j in WINDOW + 2..n - WINDOW {
         let w = &x[j - WINDOW..=j + WINDOW];
         let range = w.iter().copied().fold(f64::NEG_INFINITY, f64::max)
             - w.iter().copied().fold(f64::INFINITY, f64::min);
-        if range >= least {
+        fast[j] = range >= per_row(FAST_QUANTA_PER_ROW);
+        if range >= per_row(QUANTA_PER_ROW) {
             moving[j] = true;
             count += 1;
             repeats += usize::from(x[j] == x[j - 1]);
@@ -152,38 +180,74 @@ pub fn is_held(x: &[f64]) -> Option<bool> {
         return None;
     }
     let share = |c: usize| c as f64 / count as f64;
-    Some(
-        (share(repeats) >= HELD_SHARE && share(twice) <= CHANGED_TWICE_SHARE)
-            || (share(repeats) >= SPARSE_HELD_SHARE && on_clock(x, &moving)),
-    )
+    let held =
+        (share(repeats) >= HELD_SHARE && share(twice) <= CHANGED_TWICE_SHARE) || on_clock(x, &fast);
+    if !held {
+        return Some(Judged::EveryRow);
+    }
+    let rows = readings(x);
+    let period = clock_period(&rows, &fast)
+        .or_else(|| clock_period(&rows, &moving))
+        .unwrap_or(1.0);
+    Some(Judged::Held { period })
 }
 
-/// Whether the readings of `x` on its `moving` rows lie on a sensor's clock faster than
-/// every second row: consecutive readings one or two rows apart, and every
-/// [`CLOCK_WINDOW`] of them spanning within one row of [`CLOCK_WINDOW`] times their mean
-/// spacing (a clock's readings land on rows `ceil(t₀ + k·P)`, whose spans never stray
-/// further), in at least [`ON_CLOCK_SHARE`] of at least [`CLOCK_WINDOW`] such windows.
-fn on_clock(x: &[f64], moving: &[bool]) -> bool {
-    let rows = readings(x);
-    // Each step between readings on moving rows, if it is of one or two rows.
-    let steps: Vec<Option<usize>> = rows
-        .windows(2)
-        .map(|w| (moving[w[0]] && moving[w[1]] && w[1] - w[0] <= 2).then_some(w[1] - w[0]))
+/// Whether `x` is held ([`judge`]).
+#[must_use]
+pub fn is_held(x: &[f64]) -> Option<bool> {
+    judge(x).map(|j| j != Judged::EveryRow)
+}
+
+/// Whether the repeats of `x` on its `fast` rows lie on a sensor's clock: at least
+/// [`MIN_WRAPS`] spacings between consecutive ones with only fast rows between, and at
+/// least [`ON_CLOCK_SHARE`] of them within a row of their mean. A clock of period `P`
+/// falls behind the rows once every `P/(P − 1)` rows, and its repeats land there, so
+/// their spacings take the two whole numbers around it.
+fn on_clock(x: &[f64], fast: &[bool]) -> bool {
+    let mut slow_before = Vec::with_capacity(x.len() + 1);
+    slow_before.push(0usize);
+    for &f in fast {
+        slow_before.push(slow_before.last().copied().unwrap_or(0) + usize::from(!f));
+    }
+    let repeats: Vec<usize> = (1..x.len())
+        .filter(|&j| fast[j] && x[j] == x[j - 1])
         .collect();
-    let within: Vec<usize> = steps.iter().flatten().copied().collect();
-    if within.is_empty() {
+    let spacings: Vec<f64> = repeats
+        .windows(2)
+        .filter(|w| slow_before[w[1] + 1] == slow_before[w[0]])
+        .map(|w| (w[1] - w[0]) as f64)
+        .collect();
+    if spacings.len() < MIN_WRAPS {
         return false;
     }
-    let spacing = within.iter().sum::<usize>() as f64 / within.len() as f64;
-    let spans: Vec<usize> = steps
-        .windows(CLOCK_WINDOW)
-        .filter_map(|w| w.iter().copied().sum::<Option<usize>>())
-        .collect();
-    let on = spans
-        .iter()
-        .filter(|&&span| (span as f64 - CLOCK_WINDOW as f64 * spacing).abs() < 1.0)
-        .count();
-    spans.len() >= CLOCK_WINDOW && on as f64 >= ON_CLOCK_SHARE * spans.len() as f64
+    let mean = spacings.iter().sum::<f64>() / spacings.len() as f64;
+    let on = spacings.iter().filter(|d| (*d - mean).abs() < 1.0).count();
+    on as f64 >= ON_CLOCK_SHARE * spacings.len() as f64
+}
+
+/// The period of the clock whose readings are at `rows`, rows: the least-squares slope
+/// of row on count over runs of at least three consecutive readings all on rows where
+/// `on` holds (where the channel moves too fast for a reading to equal the one before,
+/// so none is unseen); `None` without such a run.
+fn clock_period(rows: &[usize], on: &[bool]) -> Option<f64> {
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    let mut start = 0;
+    for k in 0..=rows.len() {
+        if k < rows.len() && on[rows[k]] {
+            continue;
+        }
+        let run = &rows[start..k];
+        if run.len() >= 3 {
+            let mid_k = (run.len() - 1) as f64 / 2.0;
+            let mid_row = run.iter().sum::<usize>() as f64 / run.len() as f64;
+            for (i, &row) in run.iter().enumerate() {
+                sxy += (i as f64 - mid_k) * (row as f64 - mid_row);
+                sxx += (i as f64 - mid_k).powi(2);
+            }
+        }
+        start = k + 1;
+    }
+    (sxx > 0.0).then(|| sxy / sxx)
 }
 
 /// The rows of `x`'s readings: the first row and every row whose value differs from
@@ -195,69 +259,61 @@ pub fn readings(x: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-/// The readings either side of one whose time is found on the sensor's clock.
+/// The fewest readings either side of one whose time is found on the sensor's clock;
+/// more for a clock near a whole multiple of the logger's period ([`reading_times`]).
 pub const CLOCK_REACH: usize = 10;
 /// A reading's time is the middle of what its neighbours allow when they narrow it to
-/// less than this part of a row; otherwise its row.
+/// less than this part of a row; otherwise it is placed as a reading off the clock
+/// ([`reading_times`]).
 pub const NARROWED: f64 = 0.75;
 
-/// The times of the readings at `rows`, in rows, on the sensor's clock, and its period
-/// `P`, rows (module docs, "The fill").
+/// The times of the readings at `rows`, in rows, on the clock of period `period` rows
+/// that took them ([`Judged::Held`]; module docs, "The fill").
 ///
-/// A reading taken at `t` appears at row `ceil(t)`. The steps between readings of a
-/// moving channel take the two values `{m, m + 1}` most of them take, and the runs of
-/// such steps give the period (their least-squares slope of row on count). Each
-/// reading's time is then the middle of the times `t` that put it and the
-/// [`CLOCK_REACH`] readings either side in its run on their rows (`ρ_j − 1 < t + (j −
+/// A reading taken at `t` appears at row `ceil(t)`. The steps between a moving
+/// channel's readings take the two whole numbers around the period, and each run of
+/// such steps is one stretch of the clock's readings, one period apart. Each reading's
+/// time is the middle of the times `t` that put it and the readings either side in its
+/// run ([`CLOCK_REACH`], or enough for their lags behind the rows to go once round a
+/// row: `1/(2d)` for a period `d` off a whole number of rows) on their rows (`ρ_j − 1 < t + (j −
 /// k)·P ≤ ρ_j`), when they narrow it to less than [`NARROWED`] of a row: within
 /// `1/(2q)` of a row of its time for a period of `p/q` rows, `q ≥ 2` (a quarter of a row
 /// at 400 Hz in a 1 kHz log, a tenth at 625 Hz). A clock at a whole multiple of the
 /// logger's period (500 Hz into 1 kHz) puts every reading the same unknown part of a
 /// row before the row it shows on; each keeps its row, as the log shows it (a logger at
 /// twice a control loop's rate shows each reading on the tick it was taken). A reading
-/// whose neighbours admit no such time (a reading the sensor repeated, unseen,
-/// at a slow start), or that has fewer than two neighbours in its run, keeps its row.
+/// whose neighbours admit no such time (a reading that equalled the one before, unseen,
+/// where the channel moves slowly), or that has fewer than two neighbours in its run,
+/// is put half a row before its row: the middle of its own span, and at least half a
+/// row from the times of the readings on either side, so that no cubic is drawn
+/// through two readings at nearly one time.
 #[must_use]
-pub fn reading_times(rows: &[usize]) -> (Vec<f64>, f64) {
-    let mut times: Vec<f64> = rows.iter().map(|&r| r as f64).collect();
-    let steps: Vec<usize> = rows.windows(2).map(|w| w[1] - w[0]).collect();
-    let mut count = [0usize; MAX_HOLD + 2];
-    for &g in &steps {
-        if g <= MAX_HOLD {
-            count[g] += 1;
-        }
-    }
-    let Some(m) = (1..=MAX_HOLD).max_by_key(|&m| (count[m] + count[m + 1], std::cmp::Reverse(m)))
-    else {
-        return (times, 1.0);
-    };
-    // Runs of readings one period apart.
+pub fn reading_times(rows: &[usize], period: f64) -> Vec<f64> {
+    // A reading off the clock: its row on a clock at a whole multiple, where every
+    // reading keeps its row; else the middle of its row's span, as far from its
+    // neighbours' times as their rows allow.
+    let off_whole = (period - period.round()).abs();
+    let whole = off_whole < 1e-3;
+    // Enough neighbours for the lags behind the rows to go once round a whole row: a
+    // clock `d` periods off a whole number of rows goes round every `1/d` readings.
+    let reach = CLOCK_REACH.max((0.5 / off_whole.max(1e-3)).ceil() as usize + 1);
+    let unplaced = if whole { 0.0 } else { 0.5 };
+    let mut times: Vec<f64> = rows.iter().map(|&r| r as f64 - unplaced).collect();
+    // Runs of readings one period apart: steps of the two whole numbers around it.
+    let m = ((period + 1e-9).floor() as usize).max(1);
     let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
     let mut start = 0;
     for k in 1..=rows.len() {
-        if k == rows.len() || !(m..=m + 1).contains(&steps[k - 1]) {
+        if k == rows.len() || !(m..=m + 1).contains(&(rows[k] - rows[k - 1])) {
             if k - start >= 3 {
                 runs.push(start..k);
             }
             start = k;
         }
     }
-    let (mut sxy, mut sxx) = (0.0, 0.0);
-    for r in &runs {
-        let mid_k = (r.len() - 1) as f64 / 2.0;
-        let mid_row = rows[r.clone()].iter().sum::<usize>() as f64 / r.len() as f64;
-        for (i, &row) in rows[r.clone()].iter().enumerate() {
-            sxy += (i as f64 - mid_k) * (row as f64 - mid_row);
-            sxx += (i as f64 - mid_k).powi(2);
-        }
-    }
-    if sxx == 0.0 {
-        return (times, m as f64);
-    }
-    let period = sxy / sxx;
     for r in &runs {
         for k in r.clone() {
-            let near = k.saturating_sub(CLOCK_REACH).max(r.start)..(k + CLOCK_REACH + 1).min(r.end);
+            let near = k.saturating_sub(reach).max(r.start)..(k + reach + 1).min(r.end);
             if near.len() < 3 {
                 continue;
             }
@@ -274,7 +330,7 @@ pub fn reading_times(rows: &[usize]) -> (Vec<f64>, f64) {
             }
         }
     }
-    (times, period)
+    times
 }
 
 /// The value at `at` of the polynomial through the points `(t[i], v[i])`.
@@ -292,54 +348,88 @@ fn lagrange(t: &[f64], v: &[f64], at: f64) -> f64 {
 
 /// Fills `v`, a channel whose readings are at `readings`, at every row from a reading
 /// to the next one at most [`MAX_HOLD`] rows later, by the cubic through the two
-/// readings on either side at their `times` on the sensor's clock ([`reading_times`];
-/// the four nearest at a stretch's edge, fewer in a stretch that short); returns how
-/// many rows that held a reading were filled.
-pub fn fill(v: &mut [f64], readings: &[usize], times: &[f64]) -> usize {
+/// readings on either side at their `times` on the sensor's clock of period `period`
+/// rows ([`reading_times`]); returns how many rows that held a reading were filled.
+/// A step of more than one and a half periods in time (readings unseen, or a channel
+/// near rest) is filled by the line between its two readings, and no cubic reaches
+/// across it or a hold longer than [`MAX_HOLD`]: a cubic through readings that uneven
+/// overshoots them.
+pub fn fill(v: &mut [f64], readings: &[usize], times: &[f64], period: f64) -> usize {
     let values: Vec<f64> = readings.iter().map(|&r| v[r]).collect();
+    let n = readings.len();
+    // Whether the step into reading `k` breaks the clock's run.
+    let breaks = |k: usize| {
+        readings[k] - readings[k - 1] > MAX_HOLD || times[k] - times[k - 1] > 1.5 * period
+    };
     let mut filled = 0;
-    let mut stretch = 0..0;
-    for m in 0..readings.len().saturating_sub(1) {
-        if m >= stretch.end {
-            let end = (m + 1..readings.len())
-                .find(|&k| readings[k] - readings[k - 1] > MAX_HOLD)
-                .unwrap_or(readings.len());
-            stretch = m..end;
-        }
+    for m in 0..n.saturating_sub(1) {
         let (from, to) = (readings[m], readings[m + 1]);
         if to - from > MAX_HOLD {
             continue;
         }
+        // A reading's time lies within its row's span, so the rows from `from` to `to`
+        // lie between readings `m` and `m + 1` on the clock.
+        let nodes = if breaks(m + 1) {
+            m..m + 2
+        } else {
+            let lo = if m >= 1 && !breaks(m) { m - 1 } else { m };
+            let hi = if m + 2 < n && !breaks(m + 2) {
+                m + 3
+            } else {
+                m + 2
+            };
+            lo..hi
+        };
         for (row, value) in v.iter_mut().enumerate().take(to).skip(from) {
-            let t = row as f64;
-            // The first reading after the row on the clock (a reading's time lies within
-            // a row of its own).
-            let after = (m.saturating_sub(1).max(stretch.start)..stretch.end)
-                .find(|&k| times[k] > t)
-                .unwrap_or(stretch.end);
-            let lo = after.saturating_sub(2).max(stretch.start);
-            let hi = (lo + 4).min(stretch.end);
-            let lo = hi.saturating_sub(4).max(stretch.start);
-            *value = lagrange(&times[lo..hi], &values[lo..hi], t);
+            *value = lagrange(&times[nodes.clone()], &values[nodes.clone()], row as f64);
             filled += usize::from(row != from);
         }
     }
     filled
 }
 
+/// A channel held in one trial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldChannel {
+    /// The channel (the column's name).
+    pub channel: &'static str,
+    /// The rows of its readings ([`readings`]).
+    pub rows: Vec<usize>,
+    /// Its sensor clock's period, rows ([`Judged::Held`]).
+    pub period: f64,
+}
+
 /// What [`find`] judged of a session.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Readings {
-    /// Each trial's held channels, in trial order, each with the rows of its readings
-    /// ([`readings`]).
-    pub held: Vec<Vec<(&'static str, Vec<usize>)>>,
+    /// Each trial's held channels, in trial order.
+    pub held: Vec<Vec<HeldChannel>>,
     /// For each searched channel ([`glitch::SEARCHED`]), the trials in which it was
     /// judged (at least [`MIN_MOVING`] moving rows).
     pub judged: Vec<(&'static str, usize)>,
 }
 
-/// The held channels of each trial of `session`, each with the rows of its readings,
-/// and how many trials each channel was judged in (module docs).
+impl Readings {
+    /// The rows of `channel`'s readings in trial `index`, if it is held there.
+    #[must_use]
+    pub fn rows(&self, index: usize, channel: &str) -> Option<&[usize]> {
+        self.held
+            .get(index)?
+            .iter()
+            .find(|h| h.channel == channel)
+            .map(|h| h.rows.as_slice())
+    }
+
+    /// Whether any channel of trial `index` is held.
+    #[must_use]
+    pub fn any_held(&self, index: usize) -> bool {
+        self.held.get(index).is_some_and(|h| !h.is_empty())
+    }
+}
+
+/// The held channels of each trial of `session`, each with the rows of its readings
+/// and its clock's period, and how many trials each channel was judged in (module
+/// docs).
 #[must_use]
 pub fn find(session: &Session) -> Readings {
     let mut judged: Vec<(&'static str, usize)> =
@@ -352,9 +442,16 @@ pub fn find(session: &Session) -> Readings {
                 .iter_mut()
                 .filter_map(|(channel, count)| {
                     let x = trial.column(channel)?;
-                    let held = is_held(x)?;
+                    let judgement = judge(x)?;
                     *count += 1;
-                    held.then(|| (*channel, readings(x)))
+                    match judgement {
+                        Judged::EveryRow => None,
+                        Judged::Held { period } => Some(HeldChannel {
+                            channel,
+                            rows: readings(x),
+                            period,
+                        }),
+                    }
                 })
                 .collect()
         })
@@ -373,14 +470,14 @@ pub fn fill_session(session: &Session, found: &Readings) -> (Option<Session>, Ve
         let mut periods: Vec<f64> = Vec::new();
         let (mut trials, mut filled) = (0, 0);
         for (index, channels) in found.held.iter().enumerate() {
-            let Some((_, rows)) = channels.iter().find(|(c, _)| *c == channel) else {
+            let Some(held) = channels.iter().find(|h| h.channel == channel) else {
                 continue;
             };
-            let (times, period) = reading_times(rows);
-            periods.push(period);
+            periods.push(held.period);
+            let times = reading_times(&held.rows, held.period);
             let work = &mut copy.get_or_insert_with(|| session.clone()).trials[index];
             if let Some(values) = glitch::channel_mut(work, channel) {
-                filled += fill(values, rows, &times);
+                filled += fill(values, &held.rows, &times, held.period);
             }
             trials += 1;
         }
@@ -402,23 +499,23 @@ pub fn fill_session(session: &Session, found: &Readings) -> (Option<Session>, Ve
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reaches;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, Normal};
 
-    /// A reach at 1 kHz at `t` rows (0.25 m in 0.6 s, minimum jerk, from 0.2 s; 0.78
-    /// m/s peak).
+    /// The reach (0.25 m from 0.2 s) at `t` rows.
     fn reach_at(t: f64) -> f64 {
-        let tau = ((t * 1e-3 - 0.2) / 0.6).clamp(0.0, 1.0);
-        0.25 * (10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5))
+        reaches::min_jerk(0.25, 0.2, t / reaches::RATE_HZ)
     }
 
-    /// The reach read at the times `t` (rows), with 0.3 µm of white noise, written to
-    /// 1 µm as an encoder would.
+    /// The reach read at the times `t` (rows), with an encoder's noise, written to 1 µm
+    /// as an encoder would.
     fn encoder(seed: u64, t: impl Iterator<Item = f64>) -> Vec<f64> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let noise = Normal::new(0.0, 0.3e-6).unwrap();
-        t.map(|t| ((reach_at(t) + noise.sample(&mut rng)) * 1e6).round() / 1e6)
+        reaches::noisy(&mut rng, 0.25, 0.2, t)
+            .into_iter()
+            .map(|v| (v * 1e6).round() / 1e6)
             .collect()
     }
 
@@ -452,15 +549,23 @@ mod tests {
             // slow start and end, outside the moving rows).
             assert_eq!(is_held(&reach(seed)), Some(false), "seed {seed}");
             // Sensors at 500 and 400 Hz (readings two rows apart, and two or three in
-            // turn), and at 800 and 625 Hz (one or two), their periods `p/q` rows with
-            // `q` 1, 2, 4 and 5: clocks that are not a fraction of the logger's show
-            // their readings a varying part of a row late.
-            for (period, q) in [(2.0, 1.0), (2.5, 2.0), (1.25, 4.0), (1.6, 5.0)] {
+            // turn), and at 800, 625 and 952 Hz (one or two), their periods `p/q` rows
+            // with `q` 1, 2, 4, 5 and 20: clocks that are not a fraction of the
+            // logger's show their readings a varying part of a row late.
+            for (period, q) in [
+                (2.0, 1.0),
+                (2.5, 2.0),
+                (1.25, 4.0),
+                (1.6, 5.0),
+                (1.05, 20.0),
+            ] {
                 let (h, taken) = read_every(seed, period, 0.37);
-                assert_eq!(is_held(&h), Some(true), "seed {seed}, {period} rows");
-                let rows = readings(&h);
-                let (times, found) = reading_times(&rows);
+                let Some(Judged::Held { period: found }) = judge(&h) else {
+                    panic!("seed {seed}, {period} rows: {:?}", judge(&h));
+                };
                 assert!((found - period).abs() < 1e-3, "{period} rows: {found}");
+                let rows = readings(&h);
+                let times = reading_times(&rows, found);
                 // Each moving reading's time is found within half a `1/q` of a row (its
                 // neighbours' rows tell no finer), and by the same error for all, to a
                 // thousandth of a row (the period found is 3e-5 of a row off).
@@ -485,8 +590,14 @@ mod tests {
                 let spread = errors.iter().map(|e| (e - error).abs()).fold(0.0, f64::max);
                 assert!(spread < 1e-3, "{period} rows: {spread}");
                 let mut f = h.clone();
-                let filled = fill(&mut f, &rows, &times);
-                assert!(filled > 100, "seed {seed}, {period} rows: {filled}");
+                let filled = fill(&mut f, &rows, &times, found);
+                // Every repeat while the reach moves is filled: `1 − 1/P` of its 600
+                // rows, and more at its slow ends.
+                let repeats = (1.0 - 1.0 / period) * 600.0;
+                assert!(
+                    filled as f64 > repeats,
+                    "seed {seed}, {period} rows: {filled} for {repeats}"
+                );
                 // Against the reach late by that error: held, the rows were up to a
                 // row's travel at peak speed off (0.78 mm), at least 0.3 mm; filled,
                 // within 2 µm while the reach moves. The cubic's error on the reach over

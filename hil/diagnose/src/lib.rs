@@ -9,6 +9,7 @@
 //! | `glitch.rs` | glitches (runs of one to three bad samples) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
 //! | `hold.rs` | channels the logger wrote faster than their sensor read them, each reading held for several rows: found, and the held rows filled between the readings before the fits ([`hold::Held`]) |
 //! | `slip.rs` | samples a logger lost while keeping its clock, found from the position and put back, and frames it wrote twice, taken out, before the fits ([`slip::Slip`], [`slip::Repeat`]) |
+//! | `reaches.rs` | test data for the sample repairs' unit tests: a reach as a 1 kHz log records it |
 //! | `signals.rs` | the balance filter: one frequency response for every term of the cart balance ([`BalanceSignals`]) |
 //! | `candidate.rs` | the cart force balance, the [`Candidate`] interface, the baseline |
 //! | `friction.rs`, `ripple.rs`, `delay.rs`, `rotation.rs` | the plant-side catalog effects |
@@ -48,6 +49,8 @@ mod joint;
 mod model;
 pub mod plots;
 mod predict;
+#[cfg(test)]
+mod reaches;
 mod report;
 mod ripple;
 mod rotation;

@@ -288,7 +288,7 @@ pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Vec<Slip>
     let (mut slips, mut repeats) = (Vec::new(), Vec::new());
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
-        let search = held.held.get(index).is_none_or(Vec::is_empty);
+        let search = !held.any_held(index);
         let (mended, (twice, lost)) = mend(trial, search, period_s);
         repeats.extend(twice.into_iter().map(|(row, step_m)| Repeat {
             file: entry.file.clone(),
@@ -312,6 +312,7 @@ pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Vec<Slip>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reaches;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, Normal};
@@ -320,17 +321,9 @@ mod tests {
     /// jerk; 1.3 m/s peak speed along y) with 0.3 µm of white noise, `len` samples.
     fn reach(seed: u64, len: usize) -> (Vec<f64>, Vec<f64>) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let noise = Normal::new(0.0, 0.3e-6).unwrap();
-        let p = |i: usize| {
-            let tau = (i as f64 * 1e-3 / 0.6).clamp(0.0, 1.0);
-            10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5)
-        };
-        let x = (0..len)
-            .map(|i| 0.1 * p(i) + noise.sample(&mut rng))
-            .collect();
-        let y = (0..len)
-            .map(|i| 0.25 * p(i) + noise.sample(&mut rng))
-            .collect();
+        let rows = || (0..len).map(|i| i as f64);
+        let x = reaches::noisy(&mut rng, 0.1, 0.0, rows());
+        let y = reaches::noisy(&mut rng, 0.25, 0.0, rows());
         (x, y)
     }
 
