@@ -30,20 +30,23 @@
 //! two rows, each reading shown for one row or two) repeats at only `1 − 1/P` of the
 //! rows, and changes twice in a row often. It is held when its repeats on **fast
 //! rows** (where it moves by at least [`FAST_QUANTA_PER_ROW`] of its smallest step per
-//! row) lie on a clock: such a clock falls behind the rows once every `P/(P − 1)` rows,
+//! row, at the row and the two either side) lie on a clock: such a clock falls behind the rows once every `P/(P − 1)` rows,
 //! and its repeats land there, so the spacings between them take the two whole numbers
 //! around that; at least [`ON_CLOCK_SHARE`] of at least [`MIN_WRAPS`] spacings lie
 //! within a row of their mean. A channel read at every row does not repeat on its fast
-//! rows at all, or (a drive velocity whose count stands still now and then) at
-//! geometric spacings: at most 0.18 of them within a row of their mean on the 114
-//! realistic sessions and the shared ones. The same test holds a sensor read every second row or slower, so the two
-//! rules overlap. A clock so near the logger's rate that fewer than [`MIN_WRAPS`]
-//! spacings fall on a trial's fast rows is not judged held in that trial (at 980 Hz,
-//! the slower axis of many of the generator's trials). A channel that never moves (an
+//! rows at all, or at random: pooled over a session, at most 0.17 of its spacings
+//! within a row of their mean on 114 realistic sessions, the shared ones and three
+//! quiet ones. The same test holds a sensor read every second row or slower, so the two
+//! rules overlap. A channel is one sensor through a session, so its spacings are
+//! judged pooled over the session's trials ([`find`]): a clock so near the logger's
+//! rate that fewer than [`MIN_WRAPS`] spacings fall on one trial's fast rows (at 980
+//! Hz, the slower axis of many of the generator's trials) is found on all of them
+//! together, and every trial whose own spacings agree with the pooled mean, or that
+//! has none, is held. A channel that never moves (an
 //! imported single-axis log's zero columns) has no quantum and is not held. The
 //! readings are the rows where the value changes (and the first row); the clock's
-//! period is the least-squares slope of their rows on their count over fast rows,
-//! where none can equal the one before unseen.
+//! period is the least-squares slope of their rows on their count over the fast rows
+//! of every trial it is held in, where no reading can equal the one before unseen.
 //!
 //! **The fill.** A reading taken at time `t` appears at row `ceil(t)`. Where the
 //! sensor's clock is not an exact fraction of the logger's (a reading held for one row
@@ -94,18 +97,21 @@ pub const HELD_SHARE: f64 = 0.4;
 /// readings at least two rows apart never do (but where two clocks jitter); a quiet
 /// channel resting at exactly one value between bursts of change does at about half.
 pub const CHANGED_TWICE_SHARE: f64 = 0.1;
-/// A row is fast when the channel's range over the [`WINDOW`] rows either side is at
-/// least this many of its smallest recorded steps per row: a channel read at every row
-/// then changes at every fast row (measured: no position or force of 114 realistic
-/// sessions repeats on its fast rows more than a few times a trial, and those few
-/// irregularly).
+/// A row is fast when the channel changes by at least twice this many of its smallest
+/// recorded steps over two rows, at it and at the two rows either side: a fresh reading
+/// then never equals the one before, even where a reach turns (a window's range says
+/// nothing of that). Measured: the positions of the delay's realistic seed 1001 repeat
+/// on their fast rows 23 times in 32 trials, at random, and a quiet rig's channels not
+/// at all.
 pub const FAST_QUANTA_PER_ROW: f64 = 16.0;
 /// The fewest spacings between repeats on fast rows by which a sensor's clock is judged.
 pub const MIN_WRAPS: usize = 10;
 /// The share of spacings between repeats on fast rows within a row of their mean, at
 /// least, for a sensor's clock: a clock's are all (its repeats land where its readings
 /// fall behind the rows, every `P/(P − 1)` rows); a channel read at every row whose
-/// count stands still now and then has geometric spacings, 0.18 at most measured.
+/// count stands still now and then spaces them at random: at most 0.17 within a row of
+/// their mean, pooled over a session, on 114 realistic sessions, the shared ones and
+/// three quiet ones.
 pub const ON_CLOCK_SHARE: f64 = 0.9;
 /// The longest hold filled, rows: longer, the channel is at rest.
 pub const MAX_HOLD: usize = 8;
@@ -142,12 +148,25 @@ pub enum Judged {
     },
 }
 
-/// What `x` is (module docs): `None` when it has fewer than [`MIN_MOVING`] moving rows;
-/// else held when at least [`HELD_SHARE`] of them repeat the row before and at most
-/// [`CHANGED_TWICE_SHARE`] change twice in a row, or when its repeats on fast rows lie
-/// on a sensor's clock ([`MIN_WRAPS`], [`ON_CLOCK_SHARE`]).
+/// What one trial's channel shows ([`look`]): what [`judge`] and [`find`] decide on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Look {
+    /// Whether its moving rows repeat as a reading held for two rows or more does
+    /// ([`HELD_SHARE`], [`CHANGED_TWICE_SHARE`]).
+    pub held_rows: bool,
+    /// The spacings between its repeats on fast rows with only fast rows between, rows.
+    pub spacings: Vec<f64>,
+    /// The rows of its readings ([`readings`]).
+    pub rows: Vec<usize>,
+    /// The least-squares sums of its readings' rows on their count, over runs of
+    /// readings on fast rows and over runs on moving rows (their ratio, pooled, is the clock's period).
+    pub sums: [(f64, f64); 2],
+}
+
+/// What `x` shows (module docs); `None` when it has fewer than [`MIN_MOVING`] moving
+/// rows (or never moves).
 #[must_use]
-pub fn judge(x: &[f64]) -> Option<Judged> {
+pub fn look(x: &[f64]) -> Option<Look> {
     let n = x.len();
     if n < 2 * WINDOW + 2 {
         return None;
@@ -160,16 +179,34 @@ pub fn judge(x: &[f64]) -> Option<Judged> {
     if !quantum.is_finite() {
         return None;
     }
-    let per_row = |quanta: f64| quanta * (2 * WINDOW) as f64 * quantum;
+    let least = QUANTA_PER_ROW * (2 * WINDOW) as f64 * quantum;
     let mut moving = vec![false; n];
-    let mut fast = vec![false; n];
+    // Fast: the change over two rows, at the row and the two either side, at least
+    // twice FAST_QUANTA_PER_ROW quanta.
+    let across: Vec<f64> = (0..n)
+        .map(|k| {
+            if k == 0 || k + 1 == n {
+                0.0
+            } else {
+                (x[k + 1] - x[k - 1]).abs()
+            }
+        })
+        .collect();
+    let fast: Vec<bool> = (0..n)
+        .map(|j| {
+            j >= 3
+                && j + 3 < n
+                && across[j - 2..=j + 2]
+                    .iter()
+                    .all(|&d| d >= 2.0 * FAST_QUANTA_PER_ROW * quantum)
+        })
+        .collect();
     let (mut count, mut repeats, mut twice) = (0usize, 0usize, 0usize);
     for j in WINDOW + 2..n - WINDOW {
         let w = &x[j - WINDOW..=j + WINDOW];
         let range = w.iter().copied().fold(f64::NEG_INFINITY, f64::max)
             - w.iter().copied().fold(f64::INFINITY, f64::min);
-        fast[j] = range >= per_row(FAST_QUANTA_PER_ROW);
-        if range >= per_row(QUANTA_PER_ROW) {
+        if range >= least {
             moving[j] = true;
             count += 1;
             repeats += usize::from(x[j] == x[j - 1]);
@@ -180,16 +217,42 @@ pub fn judge(x: &[f64]) -> Option<Judged> {
         return None;
     }
     let share = |c: usize| c as f64 / count as f64;
-    let held =
-        (share(repeats) >= HELD_SHARE && share(twice) <= CHANGED_TWICE_SHARE) || on_clock(x, &fast);
-    if !held {
-        return Some(Judged::EveryRow);
+    // The spacings between repeats on fast rows, only fast rows between.
+    let mut slow_before = Vec::with_capacity(n + 1);
+    slow_before.push(0usize);
+    for &f in &fast {
+        slow_before.push(slow_before.last().copied().unwrap_or(0) + usize::from(!f));
     }
+    let fast_repeats: Vec<usize> = (1..n).filter(|&j| fast[j] && x[j] == x[j - 1]).collect();
+    let spacings = fast_repeats
+        .windows(2)
+        .filter(|w| slow_before[w[1] + 1] == slow_before[w[0]])
+        .map(|w| (w[1] - w[0]) as f64)
+        .collect();
     let rows = readings(x);
-    let period = clock_period(&rows, &fast)
-        .or_else(|| clock_period(&rows, &moving))
-        .unwrap_or(1.0);
-    Some(Judged::Held { period })
+    let sums = [clock_sums(&rows, &fast), clock_sums(&rows, &moving)];
+    Some(Look {
+        held_rows: share(repeats) >= HELD_SHARE && share(twice) <= CHANGED_TWICE_SHARE,
+        spacings,
+        rows,
+        sums,
+    })
+}
+
+/// What `x` is, judged on its own (module docs): `None` when it has fewer than
+/// [`MIN_MOVING`] moving rows; else held when its moving rows repeat as a reading held
+/// for two rows or more does, or when its repeats on fast rows lie on a sensor's clock
+/// ([`on_clock`]). [`find`] judges a session's channel on all its trials at once.
+#[must_use]
+pub fn judge(x: &[f64]) -> Option<Judged> {
+    let l = look(x)?;
+    Some(if l.held_rows || on_clock(&l.spacings, None) {
+        Judged::Held {
+            period: period(&[&l]),
+        }
+    } else {
+        Judged::EveryRow
+    })
 }
 
 /// Whether `x` is held ([`judge`]).
@@ -198,38 +261,42 @@ pub fn is_held(x: &[f64]) -> Option<bool> {
     judge(x).map(|j| j != Judged::EveryRow)
 }
 
-/// Whether the repeats of `x` on its `fast` rows lie on a sensor's clock: at least
-/// [`MIN_WRAPS`] spacings between consecutive ones with only fast rows between, and at
-/// least [`ON_CLOCK_SHARE`] of them within a row of their mean. A clock of period `P`
-/// falls behind the rows once every `P/(P − 1)` rows, and its repeats land there, so
-/// their spacings take the two whole numbers around it.
-fn on_clock(x: &[f64], fast: &[bool]) -> bool {
-    let mut slow_before = Vec::with_capacity(x.len() + 1);
-    slow_before.push(0usize);
-    for &f in fast {
-        slow_before.push(slow_before.last().copied().unwrap_or(0) + usize::from(!f));
-    }
-    let repeats: Vec<usize> = (1..x.len())
-        .filter(|&j| fast[j] && x[j] == x[j - 1])
-        .collect();
-    let spacings: Vec<f64> = repeats
-        .windows(2)
-        .filter(|w| slow_before[w[1] + 1] == slow_before[w[0]])
-        .map(|w| (w[1] - w[0]) as f64)
-        .collect();
-    if spacings.len() < MIN_WRAPS {
+/// Whether `spacings` between repeats on fast rows are a sensor's clock's: at least
+/// [`MIN_WRAPS`] of them, and at least [`ON_CLOCK_SHARE`] within a row of their mean;
+/// or, given the `mean` of a clock found on other trials, at least that share within
+/// a row of it (however few). A clock of period `P` falls behind the rows once every
+/// `P/(P − 1)` rows, and its repeats land there, so their spacings take the two whole
+/// numbers around it.
+#[must_use]
+pub fn on_clock(spacings: &[f64], mean: Option<f64>) -> bool {
+    if spacings.len() < MIN_WRAPS && mean.is_none() {
         return false;
     }
-    let mean = spacings.iter().sum::<f64>() / spacings.len() as f64;
+    let own = spacings.iter().sum::<f64>() / spacings.len().max(1) as f64;
+    let mean = mean.unwrap_or(own);
     let on = spacings.iter().filter(|d| (*d - mean).abs() < 1.0).count();
     on as f64 >= ON_CLOCK_SHARE * spacings.len() as f64
 }
 
-/// The period of the clock whose readings are at `rows`, rows: the least-squares slope
-/// of row on count over runs of at least three consecutive readings all on rows where
-/// `on` holds (where the channel moves too fast for a reading to equal the one before,
-/// so none is unseen); `None` without such a run.
-fn clock_period(rows: &[usize], on: &[bool]) -> Option<f64> {
+/// The clock's period, rows, from the least-squares sums of its readings' rows on
+/// their count over runs on fast rows in `looks` (where none can equal the one before
+/// unseen); over runs on moving rows if none is fast; else one row.
+fn period(looks: &[&Look]) -> f64 {
+    for which in 0..2 {
+        let (sxy, sxx) = looks.iter().fold((0.0, 0.0), |(a, b), l| {
+            (a + l.sums[which].0, b + l.sums[which].1)
+        });
+        if sxx > 0.0 {
+            return sxy / sxx;
+        }
+    }
+    1.0
+}
+
+/// The least-squares sums `(Σ (k − k̄)(ρ − ρ̄), Σ (k − k̄)²)` of the readings' rows `ρ`
+/// on their count `k` over runs of at least three consecutive readings all on rows
+/// where `on` holds: their ratio is the clock's period.
+fn clock_sums(rows: &[usize], on: &[bool]) -> (f64, f64) {
     let (mut sxy, mut sxx) = (0.0, 0.0);
     let mut start = 0;
     for k in 0..=rows.len() {
@@ -247,7 +314,7 @@ fn clock_period(rows: &[usize], on: &[bool]) -> Option<f64> {
         }
         start = k + 1;
     }
-    (sxx > 0.0).then(|| sxy / sxx)
+    (sxy, sxx)
 }
 
 /// The rows of `x`'s readings: the first row and every row whose value differs from
@@ -429,33 +496,45 @@ impl Readings {
 
 /// The held channels of each trial of `session`, each with the rows of its readings
 /// and its clock's period, and how many trials each channel was judged in (module
-/// docs).
+/// docs). A channel is one sensor through the session: its repeats on fast rows are
+/// judged pooled over the trials ([`on_clock`]), a trial whose own spacings agree with
+/// the pooled mean (or that has none) is held with the others, and the period is the
+/// pooled one.
 #[must_use]
 pub fn find(session: &Session) -> Readings {
-    let mut judged: Vec<(&'static str, usize)> =
-        glitch::SEARCHED.iter().map(|&(c, _)| (c, 0)).collect();
-    let held = session
-        .trials
-        .iter()
-        .map(|trial| {
-            judged
-                .iter_mut()
-                .filter_map(|(channel, count)| {
-                    let x = trial.column(channel)?;
-                    let judgement = judge(x)?;
-                    *count += 1;
-                    match judgement {
-                        Judged::EveryRow => None,
-                        Judged::Held { period } => Some(HeldChannel {
-                            channel,
-                            rows: readings(x),
-                            period,
-                        }),
-                    }
-                })
-                .collect()
-        })
-        .collect();
+    let mut held: Vec<Vec<HeldChannel>> = vec![Vec::new(); session.trials.len()];
+    let mut judged: Vec<(&'static str, usize)> = Vec::new();
+    for &(channel, _) in &glitch::SEARCHED {
+        let looks: Vec<Option<Look>> = session
+            .trials
+            .iter()
+            .map(|t| t.column(channel).and_then(look))
+            .collect();
+        judged.push((channel, looks.iter().flatten().count()));
+        let pooled: Vec<f64> = looks
+            .iter()
+            .flatten()
+            .flat_map(|l| l.spacings.iter().copied())
+            .collect();
+        let clock =
+            on_clock(&pooled, None).then(|| pooled.iter().sum::<f64>() / pooled.len() as f64);
+        let is_held =
+            |l: &Look| l.held_rows || clock.is_some_and(|m| on_clock(&l.spacings, Some(m)));
+        let members: Vec<&Look> = looks.iter().flatten().filter(|l| is_held(l)).collect();
+        if members.is_empty() {
+            continue;
+        }
+        let period = period(&members);
+        for (index, l) in looks.iter().enumerate() {
+            if let Some(l) = l.as_ref().filter(|l| is_held(l)) {
+                held[index].push(HeldChannel {
+                    channel,
+                    rows: l.rows.clone(),
+                    period,
+                });
+            }
+        }
+    }
     Readings { held, judged }
 }
 
