@@ -346,9 +346,10 @@ pub const NARROWED: f64 = 0.75;
 /// k)·P ≤ ρ_j`), when they narrow it to less than [`NARROWED`] of a row: within
 /// `1/(2q)` of a row of its time for a period of `p/q` rows, `q ≥ 2` (a quarter of a row
 /// at 400 Hz in a 1 kHz log, a tenth at 625 Hz). A clock at a whole multiple of the
-/// logger's period (500 Hz into 1 kHz) puts every reading the same unknown part of a
-/// row before the row it shows on; each keeps its row, as the log shows it (a logger at
-/// twice a control loop's rate shows each reading on the tick it was taken). A reading
+/// logger's period (500 Hz into 1 kHz; to a thousandth of a row) puts every reading the
+/// same unknown part of a row before the row it shows on; each keeps its row, as the
+/// log shows it (a logger at twice a control loop's rate shows each reading on the tick
+/// it was taken). A reading
 /// whose neighbours admit no such time (a reading that equalled the one before, unseen,
 /// where the channel moves slowly), or that has fewer than two neighbours in its run,
 /// is put half a row before its row: the middle of its own span, and at least half a
@@ -356,16 +357,18 @@ pub const NARROWED: f64 = 0.75;
 /// through two readings at nearly one time.
 #[must_use]
 pub fn reading_times(rows: &[usize], period: f64) -> Vec<f64> {
-    // A reading off the clock: its row on a clock at a whole multiple, where every
-    // reading keeps its row; else the middle of its row's span, as far from its
-    // neighbours' times as their rows allow.
+    // On a clock at a whole multiple every reading keeps its row; off the clock, a
+    // reading is put at the middle of its row's span, as far from its neighbours'
+    // times as their rows allow.
     let off_whole = (period - period.round()).abs();
     let whole = off_whole < 1e-3;
     // Enough neighbours for the lags behind the rows to go once round a whole row: a
     // clock `d` periods off a whole number of rows goes round every `1/d` readings.
-    let reach = CLOCK_REACH.max((0.5 / off_whole.max(1e-3)).ceil() as usize + 1);
-    let unplaced = if whole { 0.0 } else { 0.5 };
-    let mut times: Vec<f64> = rows.iter().map(|&r| r as f64 - unplaced).collect();
+    let reach = CLOCK_REACH.max((0.5 / off_whole).ceil() as usize + 1);
+    if whole {
+        return rows.iter().map(|&r| r as f64).collect();
+    }
+    let mut times: Vec<f64> = rows.iter().map(|&r| r as f64 - 0.5).collect();
     // Runs of readings one period apart: steps of the two whole numbers around it.
     let m = ((period + 1e-9).floor() as usize).max(1);
     let mut runs: Vec<std::ops::Range<usize>> = Vec::new();
