@@ -262,8 +262,9 @@ pub(crate) fn channel_mut<'a>(trial: &'a mut Trial, name: &str) -> Option<&'a mu
 /// The session with every glitch bridged, and the glitches, in trial and row order;
 /// `None` in place of the session when it has none (the caller keeps its own, and no
 /// trial is copied). `held` gives, for a trial's index and a channel, the rows of its
-/// readings if it is held there (`hold::find`): on those the readings are searched, not the rows, a run
-/// counts readings, and every row that holds a bridged reading is bridged with it.
+/// readings if it is held there (`hold::find`): on those the readings are searched, not
+/// the rows, a run counts readings, and every row that holds a bridged reading is
+/// bridged with it.
 #[must_use]
 pub fn bridge<'a>(
     session: &Session,

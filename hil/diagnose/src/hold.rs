@@ -245,14 +245,38 @@ pub fn look(x: &[f64]) -> Option<Look> {
 /// ([`on_clock`]). [`find`] judges a session's channel on all its trials at once.
 #[must_use]
 pub fn judge(x: &[f64]) -> Option<Judged> {
-    let l = look(x)?;
-    Some(if l.held_rows || on_clock(&l.spacings, None) {
-        Judged::Held {
-            period: period(&[&l]),
-        }
-    } else {
-        Judged::EveryRow
+    let looks = [Some(look(x)?)];
+    Some(match held_trials(&looks) {
+        Some((held, period)) if held[0] => Judged::Held { period },
+        _ => Judged::EveryRow,
     })
+}
+
+/// Which of one channel's trials (their looks, `None` where not judged) are held, and
+/// the clock's period over those; `None` when none is (module docs): a trial is held
+/// when its moving rows repeat as a reading held for two rows or more does, or when the
+/// spacings pooled over the trials lie on a clock and its own agree with their mean.
+fn held_trials(looks: &[Option<Look>]) -> Option<(Vec<bool>, f64)> {
+    let pooled: Vec<f64> = looks
+        .iter()
+        .flatten()
+        .flat_map(|l| l.spacings.iter().copied())
+        .collect();
+    let clock = on_clock(&pooled, None).then(|| pooled.iter().sum::<f64>() / pooled.len() as f64);
+    let held: Vec<bool> = looks
+        .iter()
+        .map(|l| {
+            l.as_ref().is_some_and(|l| {
+                l.held_rows || clock.is_some_and(|m| on_clock(&l.spacings, Some(m)))
+            })
+        })
+        .collect();
+    let members: Vec<&Look> = looks
+        .iter()
+        .zip(&held)
+        .filter_map(|(l, &h)| l.as_ref().filter(|_| h))
+        .collect();
+    (!members.is_empty()).then(|| (held, period(&members)))
 }
 
 /// Whether `x` is held ([`judge`]).
@@ -393,8 +417,8 @@ pub fn reading_times(rows: &[usize], period: f64) -> Vec<f64> {
                 lo = lo.max(rows[j] as f64 - 1.0 - shift);
                 hi = hi.min(rows[j] as f64 - shift);
             }
-            // Neighbours all a row apart on the clock (a whole multiple of the logger's
-            // period) tell nothing of the part of a row: the row, as the log shows it.
+            // Neighbours that leave most of a row open (a run too short for their lags
+            // to go round a row) say little; the reading is placed as one off the clock.
             if lo <= hi && hi - lo < NARROWED {
                 times[k] = 0.5 * (lo + hi);
             }
@@ -514,25 +538,14 @@ pub fn find(session: &Session) -> Readings {
             .map(|t| t.column(channel).and_then(look))
             .collect();
         judged.push((channel, looks.iter().flatten().count()));
-        let pooled: Vec<f64> = looks
-            .iter()
-            .flatten()
-            .flat_map(|l| l.spacings.iter().copied())
-            .collect();
-        let clock =
-            on_clock(&pooled, None).then(|| pooled.iter().sum::<f64>() / pooled.len() as f64);
-        let is_held =
-            |l: &Look| l.held_rows || clock.is_some_and(|m| on_clock(&l.spacings, Some(m)));
-        let members: Vec<&Look> = looks.iter().flatten().filter(|l| is_held(l)).collect();
-        if members.is_empty() {
+        let Some((is_held, period)) = held_trials(&looks) else {
             continue;
-        }
-        let period = period(&members);
-        for (index, l) in looks.iter().enumerate() {
-            if let Some(l) = l.as_ref().filter(|l| is_held(l)) {
+        };
+        for ((index, l), h) in looks.into_iter().enumerate().zip(is_held) {
+            if let (Some(l), true) = (l, h) {
                 held[index].push(HeldChannel {
                     channel,
-                    rows: l.rows.clone(),
+                    rows: l.rows,
                     period,
                 });
             }
