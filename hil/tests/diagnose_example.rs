@@ -5,15 +5,26 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use rigtwin::session::Session;
-use rigtwin_diagnose::{DiagnoseOptions, ExtendedModel, diagnose, write_report};
+use rigtwin_diagnose::{Analysis, DiagnoseOptions, ExtendedModel, diagnose, write_report};
+
+/// The example session and its diagnosis, read and diagnosed once for every test here
+/// (each takes seconds; the tests run in parallel and share it).
+fn clean() -> &'static (Session, Analysis) {
+    static CLEAN: OnceLock<(Session, Analysis)> = OnceLock::new();
+    CLEAN.get_or_init(|| {
+        let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
+        let s = Session::read(&dir).unwrap();
+        let a = diagnose(&s, &DiagnoseOptions::default()).unwrap();
+        (s, a)
+    })
+}
 
 #[test]
 fn example_ripple_is_found_and_its_model_round_trips() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let s = Session::read(&dir).unwrap();
-    let a = diagnose(&s, &DiagnoseOptions::default()).unwrap();
+    let (_, a) = clean();
     let d = &a.diagnosis;
     assert_eq!(d.cause, "force-ripple");
     // The session's law is one amplitude on both axes with the magnets at q = 0: each
@@ -41,7 +52,7 @@ fn example_ripple_is_found_and_its_model_round_trips() {
     assert_eq!(r.phase_rad[0], d.parameters["phase_x_rad"]);
 
     // The report and its three figures are written.
-    let files = write_report(&a, &tmp.path().join("report")).unwrap();
+    let files = write_report(a, &tmp.path().join("report")).unwrap();
     assert_eq!(files.len(), 4, "{files:?}");
     for f in &files {
         assert!(std::fs::metadata(f).unwrap().len() > 100, "{}", f.display());
@@ -58,11 +69,8 @@ fn example_ripple_is_found_and_its_model_round_trips() {
 /// `hil/docs/notes/2026-12-06-glitches.md`).
 #[test]
 fn glitches_are_bridged_and_change_no_finding() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let clean = Session::read(&dir).unwrap();
-    let c = diagnose(&clean, &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (clean, c) = clean();
+    let c = &c.diagnosis;
     assert!(c.glitches.is_empty(), "{:?}", c.glitches);
 
     // (trial, channel, first row, run length, size).
@@ -176,11 +184,8 @@ fn glitches_are_bridged_and_change_no_finding() {
 /// `hil/docs/notes/2026-12-06-glitches.md`).
 #[test]
 fn lost_samples_are_put_back_and_change_no_finding() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let clean = Session::read(&dir).unwrap();
-    let c = diagnose(&clean, &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (clean, c) = clean();
+    let c = &c.diagnosis;
     assert!(c.slips.is_empty(), "{:?}", c.slips);
 
     let mut s = clean.clone();
@@ -205,7 +210,7 @@ fn lost_samples_are_put_back_and_change_no_finding() {
     assert_eq!(got, want);
     assert!(g.glitches.is_empty(), "{:?}", g.glitches);
     assert!(g.cart_set_aside.is_empty(), "{:?}", g.cart_set_aside);
-    assert_near_findings(&g, &c);
+    assert_near_findings(&g, c);
 }
 
 /// A position read at 500 Hz into the 1 kHz log (each encoder reading repeated on the
@@ -219,11 +224,8 @@ fn lost_samples_are_put_back_and_change_no_finding() {
 /// filled held rows, `hil/docs/notes/2026-12-06-held-samples.md`).
 #[test]
 fn a_position_read_on_a_slower_clock_is_filled_and_changes_no_finding() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let clean = Session::read(&dir).unwrap();
-    let c = diagnose(&clean, &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (clean, c) = clean();
+    let c = &c.diagnosis;
     assert!(c.held.is_empty(), "{:?}", c.held);
 
     // A sensor at 500 Hz read on the tick it shows on (a logger at twice a control
@@ -247,7 +249,7 @@ fn a_position_read_on_a_slower_clock_is_filled_and_changes_no_finding() {
         assert_eq!(channels, vec!["x_m", "y_m"]);
         assert!(g.glitches.is_empty(), "{:?}", g.glitches);
         assert!(g.slips.is_empty(), "{:?}", g.slips);
-        assert_near_findings(&g, &c);
+        assert_near_findings(&g, c);
     }
 }
 
@@ -341,11 +343,8 @@ fn every_column(t: &mut rigtwin::session::Trial, f: impl Fn(&mut Vec<f64>)) {
 /// `hil/docs/notes/2026-12-06-held-samples.md`).
 #[test]
 fn frames_written_twice_are_taken_out_and_change_no_finding() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let clean = Session::read(&dir).unwrap();
-    let c = diagnose(&clean, &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let (clean, c) = clean();
+    let c = &c.diagnosis;
     assert!(c.repeated_frames.is_empty(), "{:?}", c.repeated_frames);
 
     let mut s = clean.clone();
@@ -380,8 +379,7 @@ fn frames_written_twice_are_taken_out_and_change_no_finding() {
 /// diagnosis before it set faults aside, `hil/docs/notes/2026-12-06-glitches.md`).
 #[test]
 fn a_trial_the_motors_did_not_follow_is_set_aside() {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../recordings/example-ripple");
-    let clean = Session::read(&dir).unwrap();
+    let (clean, c) = clean();
     let index = 5;
     let id = clean.manifest.trials[index].id;
 
@@ -427,8 +425,6 @@ fn a_trial_the_motors_did_not_follow_is_set_aside() {
     }
     assert!((f.gain.unwrap() - w.gain.unwrap()).abs() < 1e-9);
     // And the clean session sets nothing aside.
-    let c = diagnose(&clean, &DiagnoseOptions::default())
-        .unwrap()
-        .diagnosis;
+    let c = &c.diagnosis;
     assert!(c.cart_set_aside.is_empty(), "{:?}", c.cart_set_aside);
 }
