@@ -174,12 +174,14 @@ fn glitches_are_bridged_and_change_no_finding() {
     assert!(g.cart_set_aside.is_empty(), "{:?}", g.cart_set_aside);
 }
 
-/// Samples a logger lost while it kept numbering its rows, one at the peak speed of
-/// each of six trials of the example: every channel of the trial slips by a row there.
-/// Each is found after the row before it and put back, and the findings are the clean
-/// session's to the noise the cubic's fill adds: the cause, its parameters within 1 %
-/// (phases within 0.01 rad) and its gain within 0.005. Left in, six such (at the drive velocity's peak in the
-/// same trials) take the ripple's gain from 0.963 to 0.884 and its x amplitude 7 % low
+/// Samples a logger lost while it kept numbering its rows, runs of one, two and three
+/// at the peak speed of each of six trials of the example (twice each): every channel
+/// of the trial slips by a row per sample there. Each run is found after the row before
+/// it with its length and put back, and the findings are the clean session's to the
+/// noise the cubic's fill adds: the cause, its parameters within 1 % (phases within
+/// 0.01 rad) and its gain within 0.005. Left in, six single ones (at the drive
+/// velocity's peak in the same trials) take the ripple's gain from 0.963 to 0.884 and
+/// its x amplitude 7 % low
 /// (1.618 N for 1.746; measured with the diagnosis before it put them back,
 /// `hil/docs/notes/2026-12-06-glitches.md`).
 #[test]
@@ -190,22 +192,22 @@ fn lost_samples_are_put_back_and_change_no_finding() {
 
     let mut s = clean.clone();
     let mut want = Vec::new();
-    for index in [0, 3, 6, 9, 12, 15] {
+    for (index, lost) in [(0, 1), (3, 2), (6, 3), (9, 1), (12, 2), (15, 3)] {
         let t = &mut s.trials[index];
         let k = fastest_row(t);
         let rate = 1.0 / (t.t_s[1] - t.t_s[0]);
         every_column(t, |v| {
-            v.remove(k);
+            v.drain(k..k + lost);
         });
-        t.t_s.pop();
+        t.t_s.truncate(t.t_s.len() - lost);
         assert!((t.t_s[1] - 1.0 / rate).abs() < 1e-12);
-        want.push((s.manifest.trials[index].file.clone(), k - 1));
+        want.push((s.manifest.trials[index].file.clone(), k - 1, lost));
     }
     let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
     let got: Vec<_> = g
         .slips
         .iter()
-        .map(|x| (x.file.clone(), x.after_row))
+        .map(|x| (x.file.clone(), x.after_row, x.samples))
         .collect();
     assert_eq!(got, want);
     assert!(g.glitches.is_empty(), "{:?}", g.glitches);
@@ -334,10 +336,11 @@ fn every_column(t: &mut rigtwin::session::Trial, f: impl Fn(&mut Vec<f64>)) {
     }
 }
 
-/// Six frames written twice by the logger (at the drive velocity's peak in every third
-/// trial, every column; the time renumbered, every later row one period late) are found
-/// at their rows and taken out, and the findings are the clean session's exactly: the
-/// repeats are copies, so without them the trials are the recorded ones. Left in, they
+/// Six frames written two, three and four times by the logger (at the drive velocity's
+/// peak in every third trial, every column; the time renumbered, every later row a
+/// period late per repeat) are found at their rows and taken out, and the findings are
+/// the clean session's exactly: the repeats are copies, so without them the trials are
+/// the recorded ones. Left in, six frames written twice
 /// took the ripple's gain from 0.963 to 0.884 and its x amplitude 6 % low (1.636 N for
 /// 1.746; measured with the diagnosis before it took them out,
 /// `hil/docs/notes/2026-12-06-held-samples.md`).
@@ -349,13 +352,15 @@ fn frames_written_twice_are_taken_out_and_change_no_finding() {
 
     let mut s = clean.clone();
     let mut want = Vec::new();
-    for index in [0, 3, 6, 9, 12, 15] {
+    for (index, repeats) in [(0, 1), (3, 2), (6, 3), (9, 1), (12, 2), (15, 3)] {
         let t = &mut s.trials[index];
         let k = fastest_row(t);
-        every_column(t, |v| v.insert(k, v[k]));
-        let dt = t.t_s[1];
-        t.t_s.push(t.t_s.len() as f64 * dt);
-        want.push((s.manifest.trials[index].file.clone(), k + 1));
+        for _ in 0..repeats {
+            every_column(t, |v| v.insert(k, v[k]));
+            let dt = t.t_s[1];
+            t.t_s.push(t.t_s.len() as f64 * dt);
+        }
+        want.extend((k + 1..=k + repeats).map(|row| (s.manifest.trials[index].file.clone(), row)));
     }
     let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
     let got: Vec<_> = g

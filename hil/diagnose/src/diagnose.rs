@@ -465,13 +465,13 @@ pub struct Diagnosis {
     /// readings before the fits (after the glitches are bridged); the files are
     /// unchanged. Empty for a log whose channels are read at every row.
     pub held: Vec<Held>,
-    /// Samples the logger lost while keeping its clock (`super::slip`), found after the
-    /// glitches are bridged and put back before the fits; the files are unchanged.
-    /// Empty for a clean log.
+    /// Runs of samples the logger lost while keeping its clock (`super::slip`), found
+    /// after the glitches are bridged and put back before the fits; the files are
+    /// unchanged. Empty for a clean log.
     pub slips: Vec<Slip>,
-    /// Frames the logger wrote twice (`super::slip`), every later row one period late:
-    /// taken out before the lost samples are looked for; the files are unchanged.
-    /// Empty for a clean log.
+    /// Frames the logger wrote twice or more (`super::slip`), every later row a period
+    /// late per repeat: taken out before the lost samples are looked for; the files
+    /// are unchanged. Empty for a clean log.
     pub repeated_frames: Vec<Repeat>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
@@ -1759,21 +1759,24 @@ fn first_few(each: impl Iterator<Item = String>, total: usize, field: &str) -> S
 /// How many glitches or lost samples an evidence sentence names.
 const EVIDENCE_SHOWN: usize = 5;
 
-/// The evidence sentence for the lost samples put back: how many, and the first few
-/// with file, row and time.
+/// The evidence sentence for the lost samples put back: how many, in how many runs,
+/// and the first few runs with file, row, time and length.
 fn slip_evidence(slips: &[Slip]) -> String {
     let each = slips.iter().map(|s| {
         format!(
-            "{} after row {} ({:.4} s; the position stepped {:.3} mm more than its neighbours)",
+            "{} after row {} ({:.4} s; {} sample(s); the position stepped {:.3} mm more than its neighbours)",
             s.file,
             s.after_row,
             s.t_s,
+            s.samples,
             s.step_m * 1e3
         )
     });
     format!(
-        "{} sample(s) the logger lost while keeping its clock put back before the fits \
-         (every channel slips by one row there; the files are unchanged): {}",
+        "{} sample(s) in {} run(s) the logger lost while keeping its clock put back before \
+         the fits (every later channel slips by a row per sample there; the files are \
+         unchanged): {}",
+        slips.iter().map(|s| s.samples).sum::<usize>(),
         slips.len(),
         first_few(each, slips.len(), "slips")
     )

@@ -116,7 +116,8 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(s) = d.slips.first() {
         let _ = writeln!(
             out,
-            "lost samples  {} put back (a logger that dropped a frame and kept its clock), the first {} after row {} (all in the evidence and `slips` of --json)",
+            "lost samples  {} in {} run(s) put back (a logger that dropped frames and kept its clock), the first {} after row {} (all in the evidence and `slips` of --json)",
+            d.slips.iter().map(|s| s.samples).sum::<usize>(),
             d.slips.len(),
             s.file,
             s.after_row
