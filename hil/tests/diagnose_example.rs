@@ -212,7 +212,58 @@ fn lost_samples_are_put_back_and_change_no_finding() {
     assert_eq!(got, want);
     assert!(g.glitches.is_empty(), "{:?}", g.glitches);
     assert!(g.cart_set_aside.is_empty(), "{:?}", g.cart_set_aside);
-    assert_near_findings(&g, c);
+    assert_near_findings(&g, c, 0.005);
+}
+
+/// A bus that delivered no frames for 4, 8 and 20 rows at the peak speed of each of six
+/// trials of the example (twice each), the logger writing the last values it had of
+/// every measured channel (position, force, drive velocity) until the next came: each
+/// run is found at its rows and length in every channel and bridged, and the findings
+/// are the clean session's to what the cubic's fill costs: the cause, its parameters
+/// within 1 % (phases within 0.01 rad), its gain within 0.02 (0.947 for 0.963). The
+/// 64 bridged rows hold no force noise and a cubic's force where a pulse's may bend,
+/// and over 20 rows the cubic from two samples either side amplifies the force sensor's
+/// noise up to 5.5 times at the run's middle. Runs of five and eight
+/// rows in 8 of 32 trials took a 1.575 ms delay's gain to 0.04 and out of the findings
+/// (measured before they were bridged, `hil/docs/notes/2026-12-06-lost-runs.md`).
+#[test]
+fn stale_frames_are_bridged_and_change_no_finding() {
+    let (clean, c) = clean();
+    let c = &c.diagnosis;
+
+    let mut s = clean.clone();
+    let mut want = Vec::new();
+    for (index, len) in [(1, 4), (3, 8), (6, 20), (9, 4), (11, 8), (14, 20)] {
+        let t = &mut s.trials[index];
+        let i = fastest_row(t);
+        let measured = [
+            &mut t.x_m,
+            &mut t.y_m,
+            &mut t.fx_n,
+            &mut t.fy_n,
+            t.vx_m_per_s.as_mut().unwrap(),
+            t.vy_m_per_s.as_mut().unwrap(),
+        ];
+        for v in measured {
+            let held = v[i - 1];
+            v[i..i + len].iter_mut().for_each(|x| *x = held);
+        }
+        let file = s.manifest.trials[index].file.clone();
+        for channel in ["x_m", "y_m", "fx_n", "fy_n", "vx_m_per_s", "vy_m_per_s"] {
+            want.extend((i..i + len).map(|row| (file.clone(), channel, row, len)));
+        }
+    }
+    let g = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+    let got: Vec<_> = g
+        .glitches
+        .iter()
+        .map(|x| (x.file.clone(), x.channel, x.row, x.run))
+        .collect();
+    assert_eq!(got, want);
+    assert!(g.slips.is_empty(), "{:?}", g.slips);
+    assert!(g.repeated_frames.is_empty(), "{:?}", g.repeated_frames);
+    assert!(g.cart_set_aside.is_empty(), "{:?}", g.cart_set_aside);
+    assert_near_findings(&g, c, 0.02);
 }
 
 /// A position read at 500 Hz into the 1 kHz log (each encoder reading repeated on the
@@ -251,7 +302,7 @@ fn a_position_read_on_a_slower_clock_is_filled_and_changes_no_finding() {
         assert_eq!(channels, vec!["x_m", "y_m"]);
         assert!(g.glitches.is_empty(), "{:?}", g.glitches);
         assert!(g.slips.is_empty(), "{:?}", g.slips);
-        assert_near_findings(&g, c);
+        assert_near_findings(&g, c, 0.005);
     }
 }
 
@@ -275,10 +326,14 @@ fn read_on_clock(v: &[f64], period: f64, phase: f64) -> Vec<f64> {
 }
 
 /// `g` names `c`'s cause with its parameters within 1 % (phases within 0.01 rad, 0.04 mm
-/// of the 24 mm pitch) and its held-out gain within 0.005: what a mended fault may leave
-/// of the clean session's findings, a filled or put-back sample carrying its
+/// of the 24 mm pitch) and its held-out gain within `gain_tolerance`: what a mended fault
+/// may leave of the clean session's findings, a filled or put-back sample carrying its
 /// neighbours' noise.
-fn assert_near_findings(g: &rigtwin_diagnose::Diagnosis, c: &rigtwin_diagnose::Diagnosis) {
+fn assert_near_findings(
+    g: &rigtwin_diagnose::Diagnosis,
+    c: &rigtwin_diagnose::Diagnosis,
+    gain_tolerance: f64,
+) {
     assert_eq!(g.cause, c.cause);
     for (k, v) in &c.parameters {
         let w = g.parameters[k];
@@ -290,7 +345,7 @@ fn assert_near_findings(g: &rigtwin_diagnose::Diagnosis, c: &rigtwin_diagnose::D
         assert!((w - v).abs() <= tolerance, "{k} {w} against {v}");
     }
     assert!(
-        (g.gain.unwrap() - c.gain.unwrap()).abs() < 0.005,
+        (g.gain.unwrap() - c.gain.unwrap()).abs() < gain_tolerance,
         "gain {:?} against {:?}",
         g.gain,
         c.gain

@@ -59,9 +59,9 @@
 //! speaks of the noise, not of a bias the model shares across folds.
 //!
 //! What a log holds that no model should fit: a sample no physics made (an encoder or
-//! sensor spike, a stale frame, runs of up to three) is bridged before anything is
-//! fitted ([`super::glitch`]), a sample the logger lost while keeping its clock is put
-//! back ([`super::slip`]), and a cart-balance unit ten times the median unit's residual
+//! sensor spike, a stale frame, runs of up to three, stale runs of up to 20 rows while
+//! the handle moves) is bridged before anything is fitted ([`super::glitch`]), samples
+//! the logger lost while keeping its clock are put back ([`super::slip`]), and a cart-balance unit ten times the median unit's residual
 //! under the named causes' model on both of its measures (a trial the motors did not
 //! follow) is set aside and the cart balance judged again ([`faults`]).
 //!
@@ -455,10 +455,10 @@ pub struct Diagnosis {
     /// collision), with their residuals against the median unit's ([`faults`]); the
     /// hand balance keeps them. Empty for a session whose units agree.
     pub cart_set_aside: Vec<SetAside>,
-    /// Samples that no physics made (runs of one to three bad samples,
-    /// `super::glitch`), bridged by the line between the samples that bound their run
-    /// before the fits; the files are unchanged. Empty for
-    /// a clean log.
+    /// Samples that no physics made (runs of one to three bad samples, bridged by the
+    /// line between the samples that bound their run, and stale runs of up to 20 rows
+    /// while the handle moves, bridged by a cubic; `super::glitch`) before the fits;
+    /// the files are unchanged. Empty for a clean log.
     pub glitches: Vec<Glitch>,
     /// Channels the logger wrote faster than their sensor read them (`super::hold`):
     /// each reading repeated for several rows, the held rows filled between the
@@ -1443,7 +1443,7 @@ fn unlag(session: &mut Session, tau_s: [f64; 2]) -> Result<(), DiscrepancyError>
 
 /// Diagnoses a session: see the module docs.
 ///
-/// The phases: glitches (runs of one to three bad samples) in the measured channels bridged
+/// The phases: glitches (runs of one to three bad samples, stale runs) in the measured channels bridged
 /// ([`glitch::bridge`]), the rows of channels held between their sensor's readings
 /// filled ([`hold::fill_session`]), frames written twice taken out and lost samples put back ([`slip::repair`]); the balance signals of every trial; the cart balance
 /// (`judge_cart`: baseline, candidates, forward selection, the library); the hand
@@ -1828,7 +1828,7 @@ fn held_evidence(held: &[Held]) -> String {
 fn glitch_evidence(glitches: &[Glitch]) -> String {
     let each = glitches.iter().map(|g| {
         format!(
-            "{} {} at {:.4} s ({:+.4e} {} off the line, a run of {})",
+            "{} {} at {:.4} s ({:+.4e} {} off the bridge, a run of {})",
             g.file,
             g.channel,
             g.t_s,
@@ -1838,8 +1838,9 @@ fn glitch_evidence(glitches: &[Glitch]) -> String {
         )
     });
     format!(
-        "{} glitched sample(s) bridged by the line between the samples that bound their run \
-         before the fits (the files are unchanged): {}",
+        "{} glitched sample(s) bridged before the fits, runs of up to three by the line \
+         between the samples that bound them, stale runs by the cubic through the two \
+         samples on either side (the files are unchanged): {}",
         glitches.len(),
         first_few(each, glitches.len(), "glitches")
     )

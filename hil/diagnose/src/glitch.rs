@@ -1,5 +1,6 @@
 //! Glitches in a recorded channel, runs of one to [`MAX_RUN`] samples that no physics
-//! made, found and bridged before the balances are fitted.
+//! made and stale runs of up to [`MAX_STALE`] rows, found and bridged before the
+//! balances are fitted.
 //!
 //! A rig's log can hold samples that no physics made: an encoder read torn by
 //! interference, a force sensor's converter spiking for a conversion or two, a logger
@@ -66,7 +67,27 @@
 //! **The bridge.** A glitch's samples are replaced by the line between its bounding
 //! samples, for the fits only: the files are never changed, and [`Glitch`] lists each
 //! sample with the trial's file, the channel and the time so that a person can look.
-//! Runs longer than [`MAX_RUN`] are left as recorded.
+//! Runs longer than [`MAX_RUN`] are left as recorded, but for stale frames.
+//!
+//! **Stale frames.** A bus that stops delivering frames for a few milliseconds (a lost
+//! burst of EtherCAT or UDP frames) leaves the logger writing the last value it had,
+//! for as many rows, and then the fresh value: a run of rows `i … i+L−1` equal exactly
+//! to row `i − 1`, and a jump out of it. In the faster position channel, while the
+//! handle moves, the jump is the path's travel over the run, `(L + 1)` times its step:
+//! that is the stale run's signature, `MAX_RUN < L ≤` [`MAX_STALE`], with the steps
+//! into row `i − 1` and out of row `i + L` both at least the 20 µm floor, the same way,
+//! and the jump within [`STALE_TOLERANCE`] of `(L + 1)` times their mean (a velocity
+//! linear in time makes it exact). Motion does not make it: a handle turning back holds
+//! its encoder count for a few rows, but its steps either side run opposite ways; a
+//! logger writing a frame again every row it lacks a new one (a frame written twice,
+//! `super::slip`) jumps by one step, not `L + 1`. Every measured channel that holds row
+//! `i − 1`'s value through the run is bridged by the cubic through the two samples on
+//! either side at their times (the run's rows were read, unlike a logger's lost rows,
+//! so no time moves). Five such runs of five rows at peak speed, in 8 of 32 trials,
+//! took a 1.575 ms delay's held-out gain to 0.04, and of eight rows took the delay out
+//! of the findings with three trials set aside (`hil/docs/notes/2026-12-06-lost-runs.md`).
+//! A trial with a held position channel (`super::hold`, each reading held for rows by
+//! design) is not searched.
 
 use std::borrow::Cow;
 
@@ -82,6 +103,13 @@ pub const ROBUST_SIGMAS: f64 = 10.0;
 pub const QUANTA: f64 = 10.0;
 /// The longest run of bad samples bridged (module docs).
 pub const MAX_RUN: usize = 3;
+/// The longest stale run bridged, rows (module docs): 20 ms at 1 kHz, a bus's longest
+/// dropout a rig's watchdog lets pass before it stops the motors.
+pub const MAX_STALE: usize = 20;
+/// How far a stale run's jump may be from `L + 1` times the neighbours' mean step, as
+/// a share of `L + 1`: the velocity's change over the run bends it by its curvature
+/// only, and the noise little above the 20 µm floor.
+pub const STALE_TOLERANCE: f64 = 0.1;
 /// With the run bridged, the path's departure from the neighbours' midpoint at the
 /// bounding samples and the ones beyond them stays below this share of the run's
 /// smallest departure (the path is smooth through it).
@@ -104,9 +132,11 @@ pub struct Glitch {
     pub t_s: f64,
     /// The recorded value.
     pub recorded: f64,
-    /// The value the fits used: on the line between the samples that bound its run.
+    /// The value the fits used: on the line between the samples that bound its run,
+    /// or for a stale run ([`find_stale`]) on the cubic through two samples either side.
     pub bridged: f64,
-    /// The number of samples in its run (1 for a lone spike).
+    /// The number of samples in its run (1 for a lone spike; 4 to [`MAX_STALE`] for a
+    /// stale run).
     pub run: usize,
 }
 
@@ -227,6 +257,76 @@ fn is_glitch(x: &[f64], i: usize, len: usize, threshold: f64) -> bool {
         .all(|j| bend(j).abs() < share * smallest)
 }
 
+/// The stale runs `(i, L)` of a trial's position channels `x, y`: rows `i … i+L−1`
+/// that repeat row `i − 1` exactly in the faster channel while the handle moves
+/// through them (module docs), `MAX_RUN < L ≤ MAX_STALE`, in row order.
+#[must_use]
+pub fn find_stale(x: &[f64], y: &[f64]) -> Vec<(usize, usize)> {
+    let n = x.len().min(y.len());
+    let mut runs = Vec::new();
+    let mut i = 2;
+    while i + 1 < n {
+        // The run's length, counted to one beyond the longest searched.
+        let stale = |p: &[f64]| {
+            let mut end = i;
+            while end < n && end - i <= MAX_STALE && p[end] == p[i - 1] {
+                end += 1;
+            }
+            end - i
+        };
+        let (lx, ly) = (stale(x), stale(y));
+        let mut found = None;
+        for (p, len) in [(x, lx), (y, ly)] {
+            if len <= MAX_RUN || len > MAX_STALE || i + len + 1 >= n {
+                continue;
+            }
+            let (a, b) = (p[i - 1] - p[i - 2], p[i + len + 1] - p[i + len]);
+            let mean = 0.5 * (a + b);
+            let jump = p[i + len] - p[i - 1];
+            let moving = a.abs() >= POSITION_FLOOR_M
+                && b.abs() >= POSITION_FLOOR_M
+                && a.signum() == b.signum();
+            let ratio = jump / (mean * (len + 1) as f64);
+            if moving && (ratio - 1.0).abs() < STALE_TOLERANCE {
+                found = Some(len);
+            }
+        }
+        match found {
+            Some(len) => {
+                runs.push((i, len));
+                i += len + 1;
+            }
+            None => i += 1,
+        }
+    }
+    runs
+}
+
+/// The values at rows `1 … gap` after `before[1]` of the cubic through `before`
+/// (rows `−1, 0`) and `after` (rows `gap + 1, gap + 2`), Lagrange's form: a run of
+/// `gap` rows bridged at its rows' times.
+pub(crate) fn gap_cubic(
+    before: [f64; 2],
+    after: [f64; 2],
+    gap: usize,
+) -> impl Iterator<Item = f64> {
+    let m = gap as f64;
+    let nodes = [-1.0, 0.0, m + 1.0, m + 2.0];
+    let values = [before[0], before[1], after[0], after[1]];
+    (1..=gap).map(move |j| {
+        let t = j as f64;
+        (0..4)
+            .map(|a| {
+                let w: f64 = (0..4)
+                    .filter(|&b| b != a)
+                    .map(|b| (t - nodes[b]) / (nodes[a] - nodes[b]))
+                    .product();
+                w * values[a]
+            })
+            .sum::<f64>()
+    })
+}
+
 /// 1.4826 × the median absolute deviation of `e` from its median.
 fn robust_sigma(e: &[f64]) -> f64 {
     let mut v = e.to_vec();
@@ -274,10 +374,44 @@ pub fn bridge<'a>(
     let mut copy: Option<Session> = None;
     for (index, (entry, trial)) in session.iter().enumerate() {
         let first = found.len();
+        let position_held = held(index, "x_m").is_some() || held(index, "y_m").is_some();
+        let stale = if position_held {
+            Vec::new()
+        } else {
+            find_stale(&trial.x_m, &trial.y_m)
+        };
         for (channel, floor) in SEARCHED {
-            let Some(x) = trial.column(channel) else {
+            let Some(recorded) = trial.column(channel) else {
                 continue;
             };
+            // Stale runs first: each channel that holds the run's first value through
+            // it is bridged by the cubic, and the runs of one to three are searched on
+            // what that leaves.
+            let mut x = Cow::Borrowed(recorded);
+            for &(i, len) in &stale {
+                if recorded[i..i + len].iter().any(|v| *v != recorded[i - 1]) {
+                    continue;
+                }
+                let fill: Vec<f64> = gap_cubic(
+                    [recorded[i - 2], recorded[i - 1]],
+                    [recorded[i + len], recorded[i + len + 1]],
+                    len,
+                )
+                .collect();
+                for (k, value) in (i..i + len).zip(fill) {
+                    found.push(Glitch {
+                        file: entry.file.clone(),
+                        channel,
+                        row: k,
+                        t_s: trial.t_s[k],
+                        recorded: recorded[k],
+                        bridged: value,
+                        run: len,
+                    });
+                    x.to_mut()[k] = value;
+                }
+            }
+            let x: &[f64] = &x;
             // A held channel's readings and the rows each holds (every row otherwise).
             let readings = held(index, channel);
             let values: Cow<[f64]> = readings.map_or(Cow::Borrowed(x), |rows| {
@@ -418,6 +552,97 @@ mod tests {
         // at its edge) has none.
         let moving: Vec<f64> = reach(2)[300..].to_vec();
         assert!(find(&moving, 20e-6).is_empty());
+    }
+
+    #[test]
+    fn gap_cubic_is_exact_on_a_cubic() {
+        // v(t) = 2 − t + 0.5 t² − 0.1 t³ sampled at −1, 0 and after a gap of `gap`
+        // rows is put back exactly at the gap's rows, to rounding.
+        let cubic = |t: f64| 2.0 - t + 0.5 * t * t - 0.1 * t * t * t;
+        for gap in [1, 2, 3, 8, MAX_STALE] {
+            let m = gap as f64;
+            let got: Vec<f64> = gap_cubic(
+                [cubic(-1.0), cubic(0.0)],
+                [cubic(m + 1.0), cubic(m + 2.0)],
+                gap,
+            )
+            .collect();
+            assert_eq!(got.len(), gap);
+            for (j, g) in got.iter().enumerate() {
+                let want = cubic((j + 1) as f64);
+                assert!(
+                    (g - want).abs() < 1e-9 * want.abs().max(1.0),
+                    "gap {gap}, row {j}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn stale_runs_while_moving_are_found_and_bridged_to_the_noise() {
+        // A reach on both axes (0.25 m along y, 0.1 m along x) whose logger wrote the
+        // last frame again for 4, 8 and 20 rows (runs at 0.15, 0.3 and 0.45 s, where the
+        // handle moves at 0.35–0.78 m/s), on ten noise draws: each run found at its row
+        // and length, and the cubic over it within 3, 4.5 and 9 µm of the clean samples.
+        // The bounds are five standard deviations of the fill's noise less the clean
+        // sample's (the cubic's weights from two samples either side amplify the
+        // 0.3 µm noise 1.6, 2.6 and 5.5 times in the run's middle) and the cubic's error
+        // on the reach, 0.4 µm at most (20 rows). Left stale, the rows are off by up to
+        // the run's travel, 3–16 mm.
+        for seed in 0..10 {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let rows = || (0..2000).map(f64::from);
+            let x = reaches::noisy(&mut rng, 0.1, 0.0, rows());
+            let y = reaches::noisy(&mut rng, 0.25, 0.0, rows());
+            let (mut xs, mut ys) = (x.clone(), y.clone());
+            let runs = [(150, 4, 3e-6), (300, 8, 4.5e-6), (450, 20, 9e-6)];
+            for &(i, len, _) in &runs {
+                for k in i..i + len {
+                    xs[k] = xs[i - 1];
+                    ys[k] = ys[i - 1];
+                }
+            }
+            let found = find_stale(&xs, &ys);
+            assert_eq!(found, vec![(150, 4), (300, 8), (450, 20)], "seed {seed}");
+            for &(i, len, bound) in &runs {
+                for (v, clean) in [(&xs, &x), (&ys, &y)] {
+                    let fill = gap_cubic([v[i - 2], v[i - 1]], [v[i + len], v[i + len + 1]], len);
+                    for (k, value) in (i..).zip(fill) {
+                        assert!((value - clean[k]).abs() < bound, "seed {seed} row {k}");
+                    }
+                }
+            }
+            assert!(find_stale(&x, &y).is_empty(), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn a_turning_handle_a_frame_written_again_and_rest_are_not_stale() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let rows = || (0..2000).map(f64::from);
+        // Out and back (0.1 m out in 0.6 s, back from 0.6 s) at 1 µm resolution: at
+        // the turn the count holds for a few rows, with the steps either side opposite.
+        let out: Vec<f64> = reaches::noisy(&mut rng, 0.1, 0.0, rows())
+            .into_iter()
+            .zip(reaches::noisy(&mut rng, -0.1, 0.6, rows()))
+            .map(|(a, b)| ((a + b) * 1e6).round() * 1e-6)
+            .collect();
+        let held = out.windows(5).any(|w| w.iter().all(|v| *v == w[0]));
+        assert!(held, "the turn holds the count for five rows");
+        let still = vec![0.0; 2000];
+        assert!(find_stale(&still, &out).is_empty());
+        // A frame written again for five rows (inserted, the later rows late: a jump
+        // of one step out of the run) is the repeated frames' rule, not a stale run.
+        let y = reaches::noisy(&mut rng, 0.25, 0.0, rows());
+        let mut again = y.clone();
+        for _ in 0..5 {
+            again.insert(300, y[299]);
+        }
+        assert!(find_stale(&still, &again).is_empty());
+        // At rest (before the reach) every row repeats: nothing moves, nothing is stale.
+        let mut rest = y.clone();
+        rest[..20].iter_mut().for_each(|v| *v = 0.0);
+        assert!(find_stale(&still, &rest).is_empty());
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! | file | idea |
 //! |---|---|
 //! | `effect.rs` | the catalog as types: [`EffectKind`] (names, sides) and [`Effect`] (parameters in the world's and the arm's types) |
-//! | `glitch.rs` | glitches (runs of one to three bad samples) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
+//! | `glitch.rs` | glitches (runs of one to three bad samples, and stale runs of up to 20 rows while the handle moves) in a recorded channel, found and bridged before the fits ([`glitch::Glitch`]) |
 //! | `hold.rs` | channels the logger wrote faster than their sensor read them, each reading held for several rows: found, and the held rows filled between the readings before the fits ([`hold::Held`]) |
 //! | `slip.rs` | runs of samples a logger lost while keeping its clock, found from the position and put back, and frames it wrote more than once, taken out, before the fits ([`slip::Slip`], [`slip::Repeat`]) |
 //! | `reaches.rs` | test data for the sample repairs' unit tests: a reach as a 1 kHz log records it |

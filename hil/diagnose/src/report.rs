@@ -133,7 +133,7 @@ pub fn table(d: &Diagnosis) -> String {
     if let Some(g) = d.glitches.first() {
         let _ = writeln!(
             out,
-            "glitches  {} sample(s) that no physics made (runs of one to three) bridged before the fits, the first {} {} at {:.4} s (all in the evidence and `glitches` of --json)",
+            "glitches  {} sample(s) that no physics made (runs of one to three, stale runs of up to 20) bridged before the fits, the first {} {} at {:.4} s (all in the evidence and `glitches` of --json)",
             d.glitches.len(),
             g.file,
             g.channel,

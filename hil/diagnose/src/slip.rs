@@ -195,25 +195,11 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, usize, f64)> {
 }
 
 /// The values of the `lost` samples lost between `v[i − 1]` and `v[i]`: the cubic
-/// through rows `i − 2 … i + 1` at their true times `−1, 0, lost + 1, lost + 2`
-/// (Lagrange's form), at times `1 … lost` (module docs). [`find`] gives rows
+/// through rows `i − 2 … i + 1` at their true times `−1, 0, lost + 1, lost + 2`, at
+/// times `1 … lost` ([`glitch::gap_cubic`]; module docs). [`find`] gives rows
 /// `2 ≤ i ≤ len − 2` only (its spikes in the step have both neighbours).
-fn lost_values(v: &[f64], i: usize, lost: usize) -> impl Iterator<Item = f64> + '_ {
-    let m = lost as f64;
-    let nodes = [-1.0, 0.0, m + 1.0, m + 2.0];
-    let values = [v[i - 2], v[i - 1], v[i], v[i + 1]];
-    (1..=lost).map(move |j| {
-        let t = j as f64;
-        (0..4)
-            .map(|a| {
-                let w: f64 = (0..4)
-                    .filter(|&b| b != a)
-                    .map(|b| (t - nodes[b]) / (nodes[a] - nodes[b]))
-                    .product();
-                w * values[a]
-            })
-            .sum::<f64>()
-    })
+fn lost_values(v: &[f64], i: usize, lost: usize) -> impl Iterator<Item = f64> {
+    glitch::gap_cubic([v[i - 2], v[i - 1]], [v[i], v[i + 1]], lost)
 }
 
 /// `trial` with the samples of each run `(row, lost)` of `runs` (ascending rows) put
@@ -449,22 +435,6 @@ mod tests {
                         assert!((t.x_m[k] - x[k]).abs() < 3e-6, "seed {seed} row {k}");
                     }
                 }
-            }
-        }
-    }
-
-    #[test]
-    fn lost_values_are_the_cubic_at_the_gap() {
-        // A cubic is put back exactly whatever the gap: v(t) = 2 − t + 0.5 t² − 0.1 t³
-        // sampled at −1, 0 and after a gap of `lost` rows.
-        let cubic = |t: f64| 2.0 - t + 0.5 * t * t - 0.1 * t * t * t;
-        for lost in 1..=MAX_LOST {
-            let m = lost as f64;
-            let v = [cubic(-1.0), cubic(0.0), cubic(m + 1.0), cubic(m + 2.0)];
-            let got: Vec<f64> = lost_values(&v, 2, lost).collect();
-            for (j, g) in got.iter().enumerate() {
-                let t = (j + 1) as f64;
-                assert!((g - cubic(t)).abs() < 1e-12, "{lost} lost, sample {j}");
             }
         }
     }
