@@ -72,8 +72,8 @@
 //! **Stale frames.** A bus that stops delivering frames for a few milliseconds (a lost
 //! burst of EtherCAT or UDP frames) leaves the logger writing the last value it had,
 //! for as many rows, and then the fresh value: a run of rows `i … i+L−1` equal exactly
-//! to row `i − 1`, and a jump out of it. In the faster position channel, while the
-//! handle moves, the jump is the path's travel over the run, `(L + 1)` times its step:
+//! to row `i − 1`, and a jump out of it. In a position channel (either axis that
+//! passes), while the handle moves along it, the jump is the path's travel over the run, `(L + 1)` times its step:
 //! that is the stale run's signature, `MAX_RUN < L ≤` [`MAX_STALE`], with the steps
 //! into row `i − 1` and out of row `i + L` both at least the 20 µm floor, the same way,
 //! and the jump within [`STALE_TOLERANCE`] of `(L + 1)` times their mean (a velocity
@@ -258,7 +258,7 @@ fn is_glitch(x: &[f64], i: usize, len: usize, threshold: f64) -> bool {
 }
 
 /// The stale runs `(i, L)` of a trial's position channels `x, y`: rows `i … i+L−1`
-/// that repeat row `i − 1` exactly in the faster channel while the handle moves
+/// that repeat row `i − 1` exactly in either position channel while the handle moves
 /// through them (module docs), `MAX_RUN < L ≤ MAX_STALE`, in row order.
 #[must_use]
 pub fn find_stale(x: &[f64], y: &[f64]) -> Vec<(usize, usize)> {
