@@ -282,9 +282,15 @@ fn a_position_read_on_a_slower_clock_is_filled_and_changes_no_finding() {
     assert!(c.held.is_empty(), "{:?}", c.held);
 
     // A sensor at 500 Hz read on the tick it shows on (a logger at twice a control
-    // loop's rate), and ones at 625 and 980 Hz on their own clocks (the last repeats
-    // once in 50 rows, too rarely to be judged in every trial alone).
-    for (period, rate_hz) in [(2.0, 500.0), (1.6, 625.0), (1.0 / 0.98, 980.0)] {
+    // loop's rate), and ones at 625, 980 and 999 Hz on their own clocks (the last two
+    // repeat once in 50 and 1000 rows, too rarely to be judged in every trial alone;
+    // at 999 Hz the axes are held only as one sensor, `hold::look_sensor`).
+    for (period, rate_hz) in [
+        (2.0, 500.0),
+        (1.6, 625.0),
+        (1.0 / 0.98, 980.0),
+        (1.0 / 0.999, 999.0),
+    ] {
         let mut s = clean.clone();
         for t in &mut s.trials {
             for v in [&mut t.x_m, &mut t.y_m] {

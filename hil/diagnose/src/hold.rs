@@ -48,6 +48,24 @@
 //! period is the least-squares slope of their rows on their count over the fast rows
 //! of every trial it is held in, where no reading can equal the one before unseen.
 //!
+//! **One sensor, several channels.** A sensor reads its channels together: an encoder
+//! interface both axes, a force sensor both forces, a drive both velocities
+//! ([`SENSORS`]). A reach along one axis moves the other by little, and a clock near
+//! the logger's rate (990 Hz: one repeated row in a hundred) shows on the moving
+//! channel's repeats and not on the slow one's, which is then judged read at every row
+//! while its partner is filled: the two axes a varying part of a row apart took the
+//! delay's seed 1001 from 1.30 ms to 1.725 ms and its held-out gain from 0.38 to 0.06.
+//! So each pair is judged again as one sensor ([`look_sensor`]): a row repeats when
+//! every channel repeats, and is moving or fast when any channel is, each by its own
+//! quantum, so the rules above apply unchanged. Where the pair's joint repeats lie on a
+//! clock (pooled over the session as above), both channels are held in those trials
+//! on the sensor's readings, the rows where either channel changes, and the pair's
+//! period. The joint readings also show a reading one channel alone hides (equal to
+//! the one before where it moves slowly). A channel read at every row rarely repeats
+//! where its partner does (both at random), so a pair of channels each read at every
+//! row shows no clock, and one whose partner is on another clock neither; each then
+//! keeps what it shows alone.
+//!
 //! **The fill.** A reading taken at time `t` appears at row `ceil(t)`. Where the
 //! sensor's clock is not an exact fraction of the logger's (a reading held for one row
 //! or two, or two or three, in turn), what part of a row each reading is late varies
@@ -167,51 +185,72 @@ pub struct Look {
 /// rows (or never moves).
 #[must_use]
 pub fn look(x: &[f64]) -> Option<Look> {
-    let n = x.len();
+    look_sensor(&[x])
+}
+
+/// What the channels of one sensor show together (module docs, "One sensor, several
+/// channels"): a row repeats when every channel repeats, and is moving or fast when
+/// some channel is, each by its own quantum; `None` when fewer than [`MIN_MOVING`]
+/// rows are moving (or no channel moves). For one channel, [`look`].
+#[must_use]
+pub fn look_sensor(channels: &[&[f64]]) -> Option<Look> {
+    let n = channels.iter().map(|x| x.len()).min()?;
     if n < 2 * WINDOW + 2 {
         return None;
     }
-    let quantum = x
-        .windows(2)
-        .map(|w| (w[1] - w[0]).abs())
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if !quantum.is_finite() {
+    let mut moving = vec![false; n];
+    let mut fast = vec![false; n];
+    let mut any = false;
+    for x in channels {
+        let x = &x[..n];
+        let quantum = x
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if !quantum.is_finite() {
+            continue;
+        }
+        any = true;
+        let least = QUANTA_PER_ROW * (2 * WINDOW) as f64 * quantum;
+        // Fast: the change over two rows, at the row and the two either side, at least
+        // twice FAST_QUANTA_PER_ROW quanta.
+        let across: Vec<f64> = (0..n)
+            .map(|k| {
+                if k == 0 || k + 1 == n {
+                    0.0
+                } else {
+                    (x[k + 1] - x[k - 1]).abs()
+                }
+            })
+            .collect();
+        for j in 3..n.saturating_sub(3) {
+            fast[j] |= across[j - 2..=j + 2]
+                .iter()
+                .all(|&d| d >= 2.0 * FAST_QUANTA_PER_ROW * quantum);
+        }
+        for j in WINDOW + 2..n - WINDOW {
+            let w = &x[j - WINDOW..=j + WINDOW];
+            let range = w.iter().copied().fold(f64::NEG_INFINITY, f64::max)
+                - w.iter().copied().fold(f64::INFINITY, f64::min);
+            moving[j] |= range >= least;
+        }
+    }
+    if !any {
         return None;
     }
-    let least = QUANTA_PER_ROW * (2 * WINDOW) as f64 * quantum;
-    let mut moving = vec![false; n];
-    // Fast: the change over two rows, at the row and the two either side, at least
-    // twice FAST_QUANTA_PER_ROW quanta.
-    let across: Vec<f64> = (0..n)
-        .map(|k| {
-            if k == 0 || k + 1 == n {
-                0.0
-            } else {
-                (x[k + 1] - x[k - 1]).abs()
-            }
-        })
-        .collect();
-    let fast: Vec<bool> = (0..n)
-        .map(|j| {
-            j >= 3
-                && j + 3 < n
-                && across[j - 2..=j + 2]
-                    .iter()
-                    .all(|&d| d >= 2.0 * FAST_QUANTA_PER_ROW * quantum)
-        })
-        .collect();
+    let same = |j: usize| channels.iter().all(|x| x[j] == x[j - 1]);
     let (mut count, mut repeats, mut twice) = (0usize, 0usize, 0usize);
-    for j in WINDOW + 2..n - WINDOW {
-        let w = &x[j - WINDOW..=j + WINDOW];
-        let range = w.iter().copied().fold(f64::NEG_INFINITY, f64::max)
-            - w.iter().copied().fold(f64::INFINITY, f64::min);
-        if range >= least {
-            moving[j] = true;
-            count += 1;
-            repeats += usize::from(x[j] == x[j - 1]);
-            twice += usize::from(x[j] != x[j - 1] && x[j - 1] != x[j - 2]);
-        }
+    for (j, _) in moving
+        .iter()
+        .enumerate()
+        .take(n - WINDOW)
+        .skip(WINDOW + 2)
+        .filter(|(_, m)| **m)
+    {
+        count += 1;
+        repeats += usize::from(same(j));
+        twice += usize::from(!same(j) && !same(j - 1));
     }
     if count < MIN_MOVING {
         return None;
@@ -223,13 +262,13 @@ pub fn look(x: &[f64]) -> Option<Look> {
     for &f in &fast {
         slow_before.push(slow_before.last().copied().unwrap_or(0) + usize::from(!f));
     }
-    let fast_repeats: Vec<usize> = (1..n).filter(|&j| fast[j] && x[j] == x[j - 1]).collect();
+    let fast_repeats: Vec<usize> = (1..n).filter(|&j| fast[j] && same(j)).collect();
     let spacings = fast_repeats
         .windows(2)
         .filter(|w| slow_before[w[1] + 1] == slow_before[w[0]])
         .map(|w| (w[1] - w[0]) as f64)
         .collect();
-    let rows = readings(x);
+    let rows: Vec<usize> = (0..n).filter(|&j| j == 0 || !same(j)).collect();
     let sums = [clock_sums(&rows, &fast), clock_sums(&rows, &moving)];
     Some(Look {
         held_rows: share(repeats) >= HELD_SHARE && share(twice) <= CHANGED_TWICE_SHARE,
@@ -526,7 +565,9 @@ impl Readings {
 /// docs). A channel is one sensor through the session: its repeats on fast rows are
 /// judged pooled over the trials ([`on_clock`]), a trial whose own spacings agree with
 /// the pooled mean (or that has none) is held with the others, and the period is the
-/// pooled one.
+/// pooled one. Each pair of one sensor's channels ([`SENSORS`]) is then judged as one
+/// ([`look_sensor`]): where it is held, both channels are, on the pair's readings and
+/// period, in place of what each showed alone.
 #[must_use]
 pub fn find(session: &Session) -> Readings {
     let mut held: Vec<Vec<HeldChannel>> = vec![Vec::new(); session.trials.len()];
@@ -551,8 +592,40 @@ pub fn find(session: &Session) -> Readings {
             }
         }
     }
+    // One sensor's channels together: where its clock shows on their joint readings,
+    // both are held on them (they show readings either channel alone hides).
+    for pair in SENSORS {
+        let looks: Vec<Option<Look>> = session
+            .trials
+            .iter()
+            .map(|t| look_sensor(&[t.column(pair[0])?, t.column(pair[1])?]))
+            .collect();
+        let Some((is_held, period)) = held_trials(&looks) else {
+            continue;
+        };
+        for ((index, l), h) in looks.into_iter().enumerate().zip(is_held) {
+            let (Some(l), true) = (l, h) else {
+                continue;
+            };
+            for channel in pair {
+                held[index].retain(|c| c.channel != channel);
+                held[index].push(HeldChannel {
+                    channel,
+                    rows: l.rows.clone(),
+                    period,
+                });
+            }
+        }
+    }
     Readings { held, judged }
 }
+
+/// The channels one sensor reads together, judged together too ([`look_sensor`]).
+pub const SENSORS: [[&str; 2]; 3] = [
+    ["x_m", "y_m"],
+    ["fx_n", "fy_n"],
+    ["vx_m_per_s", "vy_m_per_s"],
+];
 
 /// `session` with the held rows of every held channel filled (`found` as [`find`]
 /// gives, judged on the recorded values; `session` may have its glitches bridged),
@@ -726,6 +799,81 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    /// Two channels of one sensor whose reading `k` is taken at `phase + k·period` rows,
+    /// each shown from the first row at or after it until the next, 1200 rows: a reach
+    /// of 0.25 m on `y` and of `x_extent_m` on `x`, each to 1 µm; and the times taken.
+    fn sensor_pair(seed: u64, x_extent_m: f64, period: f64, phase: f64) -> [Vec<f64>; 3] {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let count = ((1200.0 - phase) / period).ceil() as usize;
+        let taken: Vec<f64> = (0..count).map(|k| phase + k as f64 * period).collect();
+        let micron =
+            |v: Vec<f64>| -> Vec<f64> { v.iter().map(|v| (v * 1e6).round() / 1e6).collect() };
+        let xs = micron(reaches::noisy(
+            &mut rng,
+            x_extent_m,
+            0.2,
+            taken.iter().copied(),
+        ));
+        let ys = micron(reaches::noisy(&mut rng, 0.25, 0.2, taken.iter().copied()));
+        let (mut x, mut y) = (vec![0.0; 1200], vec![0.0; 1200]);
+        let mut k = 0;
+        for row in 0..1200 {
+            while k + 1 < count && taken[k + 1] <= row as f64 {
+                k += 1;
+            }
+            (x[row], y[row]) = (xs[k], ys[k]);
+        }
+        [x, y, taken]
+    }
+
+    #[test]
+    fn the_channels_of_one_sensor_are_held_on_its_readings() {
+        // A position sensor at 990 Hz (a reading every 1.01 rows, one repeated row in
+        // a hundred), four trials: `y` reaches 0.25 m, `x` 4 mm (at most 12.5 µm a row,
+        // never a fast row of its own). Alone, `x` repeats too seldom and too slowly to
+        // show the clock, and is judged read at every row; with `y` its repeats are the
+        // sensor's, and both are held on the joint readings.
+        let period = 1.01;
+        let trials: Vec<[Vec<f64>; 3]> = (0..4)
+            .map(|s| sensor_pair(s, 0.004, period, 0.13 + 0.2 * s as f64))
+            .collect();
+        let alone: Vec<Option<Look>> = trials.iter().map(|t| look(&t[0])).collect();
+        assert!(held_trials(&alone).is_none(), "x alone held");
+        let joint: Vec<Option<Look>> = trials
+            .iter()
+            .map(|t| look_sensor(&[&t[0], &t[1]]))
+            .collect();
+        let Some((held, found)) = held_trials(&joint) else {
+            panic!("the pair is not held");
+        };
+        assert!(held.iter().all(|h| *h), "{held:?}");
+        assert!((found - period).abs() < 1e-3, "{found}");
+        for (t, l) in trials.iter().zip(&joint) {
+            let rows = &l.as_ref().unwrap().rows;
+            let times = reading_times(rows, found);
+            let mut x = t[0].clone();
+            fill(&mut x, rows, &times, found);
+            // The truth at each row: the reach where the clock's error puts it (the
+            // readings' times are found to within 1/(2q) of a row, q = 100, all off by
+            // the same amount), checked while the reach moves.
+            let taken = &t[2];
+            let k = taken.partition_point(|&tk| tk <= 500.0) - 1;
+            let error = times[rows.partition_point(|&r| r < 500)] - taken[k];
+            let truth =
+                |j: usize| reaches::min_jerk(0.004, 0.2, (j as f64 - error) / reaches::RATE_HZ);
+            let (mut worst_held, mut worst_filled) = (0.0_f64, 0.0_f64);
+            for j in 300..=700 {
+                worst_held = worst_held.max((t[0][j] - truth(j)).abs());
+                worst_filled = worst_filled.max((x[j] - truth(j)).abs());
+            }
+            // Held, a row late at the repeats: up to a row's travel (12.5 µm) off;
+            // filled, within the readings' noise and quantum in the cubic's weights
+            // (0.3 µm and 0.5 µm: 2 µm).
+            assert!(worst_held > 8e-6, "{worst_held}");
+            assert!(worst_filled < 2e-6, "{worst_filled}");
         }
     }
 
