@@ -283,9 +283,7 @@ pub fn find_stale(x: &[f64], y: &[f64]) -> Vec<(usize, usize)> {
             let (a, b) = (p[i - 1] - p[i - 2], p[i + len + 1] - p[i + len]);
             let mean = 0.5 * (a + b);
             let jump = p[i + len] - p[i - 1];
-            let moving = a.abs() >= POSITION_FLOOR_M
-                && b.abs() >= POSITION_FLOOR_M
-                && a.signum() == b.signum();
+            let moving = moves_through(a, b);
             let ratio = jump / (mean * (len + 1) as f64);
             if moving && (ratio - 1.0).abs() < STALE_TOLERANCE {
                 found = Some(len);
@@ -300,6 +298,13 @@ pub fn find_stale(x: &[f64], y: &[f64]) -> Vec<(usize, usize)> {
         }
     }
     runs
+}
+
+/// Whether the handle moves through a run of a position channel: the steps into it
+/// (`a`) and out of it (`b`) each at least [`POSITION_FLOOR_M`], and the same way (a
+/// handle turning back steps either side opposite ways).
+pub(crate) fn moves_through(a: f64, b: f64) -> bool {
+    a.abs() >= POSITION_FLOOR_M && b.abs() >= POSITION_FLOOR_M && a.signum() == b.signum()
 }
 
 /// The values at rows `1 … gap` after `before[1]` of the cubic through `before`
@@ -392,12 +397,11 @@ pub fn bridge<'a>(
                 if recorded[i..i + len].iter().any(|v| *v != recorded[i - 1]) {
                     continue;
                 }
-                let fill: Vec<f64> = gap_cubic(
+                let fill = gap_cubic(
                     [recorded[i - 2], recorded[i - 1]],
                     [recorded[i + len], recorded[i + len + 1]],
                     len,
-                )
-                .collect();
+                );
                 for (k, value) in (i..i + len).zip(fill) {
                     found.push(Glitch {
                         file: entry.file.clone(),

@@ -143,8 +143,7 @@ pub fn find_repeats(trial: &Trial) -> Vec<(usize, f64)> {
         } else {
             (ay, by)
         };
-        let floor = glitch::POSITION_FLOOR_M;
-        if run <= MAX_LOST && a.abs() >= floor && b.abs() >= floor && a.signum() == b.signum() {
+        if run <= MAX_LOST && glitch::moves_through(a, b) {
             rows.extend((k..=last).map(|r| (r, 0.5 * (a + b).abs())));
         }
         k = last + 1;
