@@ -303,6 +303,8 @@ fn a_position_read_on_a_slower_clock_is_filled_and_changes_no_finding() {
             assert_eq!(h.trials, n, "{h:?}");
             assert!((h.rows_per_reading - period).abs() < 1e-3, "{h:?}");
             assert!((h.reading_rate_hz - rate_hz).abs() < 0.5, "{h:?}");
+            // Only at a whole multiple is when within its row a reading was taken unknown.
+            assert_eq!(h.reading_time_unknown, period == 2.0, "{h:?}");
         }
         let channels: Vec<_> = g.held.iter().map(|h| h.channel).collect();
         assert_eq!(channels, vec!["x_m", "y_m"]);

@@ -1809,8 +1809,11 @@ fn held_evidence(held: &[Held]) -> String {
     let each: Vec<String> = held
         .iter()
         .map(|h| {
+            let unknown = h
+                .timing_caveat()
+                .map_or_else(String::new, |c| format!(" ({c})"));
             format!(
-                "{} read every {} rows ({:.0} Hz) in {} of {} trials, {} rows filled",
+                "{} read every {} rows ({:.0} Hz) in {} of {} trials, {} rows filled{unknown}",
                 h.channel, h.rows_per_reading, h.reading_rate_hz, h.trials, h.judged, h.filled_rows
             )
         })

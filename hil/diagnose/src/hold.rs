@@ -151,6 +151,32 @@ pub struct Held {
     pub reading_rate_hz: f64,
     /// Rows filled between readings, over the session.
     pub filled_rows: usize,
+    /// Whether the clock is a whole multiple of the logger's period, two or more (500 Hz
+    /// into 1 kHz, to a thousandth of a row): each reading then keeps the row it shows on, and when
+    /// within the row before it the reading was taken, up to one row earlier, the log
+    /// cannot show ([`reading_times`]). A position read so may be that much older than
+    /// its row, and a named actuation delay takes it up: up to one row long.
+    pub reading_time_unknown: bool,
+}
+
+impl Held {
+    /// For a position read on a clock at a whole multiple of the log's period
+    /// ([`Self::reading_time_unknown`]), what that leaves unknown, in words; `None`
+    /// otherwise. Not for a force: one read up to a row late moved the delay by at most
+    /// 0.075 ms (the baseline's latency takes it up;
+    /// `hil/docs/notes/2026-12-07-one-sensor-two-channels.md`).
+    #[must_use]
+    pub fn timing_caveat(&self) -> Option<String> {
+        (self.reading_time_unknown && self.channel.ends_with("_m")).then(|| {
+            format!(
+                "a whole multiple of the log's period: when within the row before its row \
+                 each reading was taken the log cannot show, so the position may be up to \
+                 a row, {:.2} ms, older than it shows, and a named actuation delay up to \
+                 that much long",
+                1e3 / (self.reading_rate_hz * self.rows_per_reading)
+            )
+        })
+    }
 }
 
 /// What [`judge`] finds a channel to be.
@@ -658,6 +684,8 @@ pub fn fill_session(session: &Session, found: &Readings) -> (Option<Session>, Ve
                 rows_per_reading,
                 reading_rate_hz: session.manifest.rate_hz / rows_per_reading,
                 filled_rows: filled,
+                reading_time_unknown: rows_per_reading.round() >= 2.0
+                    && (rows_per_reading - rows_per_reading.round()).abs() < 1e-3,
             });
         }
     }

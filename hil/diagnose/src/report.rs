@@ -124,9 +124,12 @@ pub fn table(d: &Diagnosis) -> String {
         );
     }
     for h in &d.held {
+        let caveat = h
+            .timing_caveat()
+            .map_or_else(String::new, |c| format!("; {c}"));
         let _ = writeln!(
             out,
-            "held  {} read every {} rows ({:.0} Hz) in {} of {} trials: each reading repeated until the next, the repeated rows filled between the readings before the fits (`held` in --json)",
+            "held  {} read every {} rows ({:.0} Hz) in {} of {} trials: each reading repeated until the next, the repeated rows filled between the readings before the fits (`held` in --json){caveat}",
             h.channel, h.rows_per_reading, h.reading_rate_hz, h.trials, h.judged
         );
     }
