@@ -97,7 +97,7 @@ use super::joint::{Joint, Member, MemberParameters, refine};
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
-use super::slip::{self, Repeat, Slip};
+use super::slip::{self, Repeat, Skip, Slip};
 use super::stats::{jackknife_se, mean_sd, student_t_critical, upper_median};
 use super::unexplained::{LIBRARY, Term, peak_force_n};
 use rigtwin_device::signal::{EdgeMode, savgol_filter, welch};
@@ -473,6 +473,14 @@ pub struct Diagnosis {
     /// late per repeat: taken out before the lost samples are looked for; the files
     /// are unchanged. Empty for a clean log.
     pub repeated_frames: Vec<Repeat>,
+    /// Readings a position sensor on a clock faster than the log's skipped
+    /// (`super::slip`): the position stepped twice its neighbours' mean while the
+    /// controller's reference stepped on as before. The position is put at the log's
+    /// rows from its readings' times before the fits; the files are unchanged. Absent
+    /// for a log without them (and for a log without the reference columns, which
+    /// cannot show them).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub skipped_readings: Vec<Skip>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
 }
@@ -1461,7 +1469,7 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let session = bridged.as_ref().unwrap_or(session);
     let (filled, held) = hold::fill_session(session, &readings);
     let session = filled.as_ref().unwrap_or(session);
-    let (repaired, slips, repeats) = slip::repair(session, &readings);
+    let (repaired, slips, repeats, skips) = slip::repair(session, &readings);
     let session = repaired.as_ref().unwrap_or(session);
     let (mut a, residuals) = diagnose_units(session, opts, &[])?;
     let faults = faults(&residuals);
@@ -1504,6 +1512,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         d.evidence.push(slip_evidence(&slips));
     }
     d.slips = slips;
+    if !skips.is_empty() {
+        d.evidence.push(skip_evidence(&skips));
+    }
+    d.skipped_readings = skips;
     Ok(a)
 }
 
@@ -1581,6 +1593,7 @@ fn diagnose_units(
         glitches: Vec::new(),
         held: Vec::new(),
         slips: Vec::new(),
+        skipped_readings: Vec::new(),
         repeated_frames: Vec::new(),
         evidence: Vec::new(),
     };
@@ -1779,6 +1792,23 @@ fn slip_evidence(slips: &[Slip]) -> String {
         slips.iter().map(|s| s.samples).sum::<usize>(),
         slips.len(),
         first_few(each, slips.len(), "slips")
+    )
+}
+
+/// The evidence sentence for the position's skipped readings: how many, and the first
+/// few with file, row and time.
+fn skip_evidence(skips: &[Skip]) -> String {
+    let each = skips
+        .iter()
+        .map(|s| format!("{} row {} ({:.4} s)", s.file, s.row, s.t_s));
+    format!(
+        "{} reading(s) the position sensor skipped, its clock faster than the log's (the \
+         position stepped twice its neighbours' mean where the controller's reference \
+         stepped on as before): each row's position put at the log's row from its \
+         reading's time, the reading's age rising by a row from one skip to the next, \
+         before the fits (the files are unchanged): {}",
+        skips.len(),
+        first_few(each, skips.len(), "skipped_readings")
     )
 }
 

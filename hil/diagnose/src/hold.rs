@@ -493,7 +493,7 @@ pub fn reading_times(rows: &[usize], period: f64) -> Vec<f64> {
 }
 
 /// The value at `at` of the polynomial through the points `(t[i], v[i])`.
-fn lagrange(t: &[f64], v: &[f64], at: f64) -> f64 {
+pub(crate) fn lagrange(t: &[f64], v: &[f64], at: f64) -> f64 {
     (0..t.len())
         .map(|i| {
             let w: f64 = (0..t.len())

@@ -54,6 +54,29 @@
 //! ([`super::hold`]) repeats by design and is not searched, nor is a trial without a
 //! force sensor (constant force columns: nothing tells a repeat from a stalled
 //! encoder), nor a frame repeated at rest, which moves no fit.
+//!
+//! **A position sensor faster than the log.** An encoder interface on its own clock a
+//! little faster than the logger's (1001 or 1010 Hz into 1 kHz; two crystals, or a
+//! stream at its own rate) is read at each row for its latest reading: one reading in
+//! `d + 1` is never shown, and the rest are up to a row old, each `1/(d + 1)` of a row
+//! older than the one before until the next skip. The position steps twice its
+//! neighbours' mean at a skip, as at a lost frame, but nothing else skipped: the
+//! controller's reference (`ref_x_m`, `ref_y_m`), computed at every tick on the log's
+//! clock, steps on as before, where a lost frame stretches its step too (at the rows
+//! found: 1.00 and 2.00 times its neighbours' mean). Put back in every column as lost,
+//! such skips left the force a row late after each: 1010 Hz took the delay's seed 1000
+//! to 2.075 ms and a gain of 0.123 (clean 1.575 ms, 0.337), and seed 1001's out of the
+//! findings. Left as recorded, worse (1001 Hz: gain 0.112). So a single lost sample
+//! where the reference moves by at least 20 µm a row and steps within
+//! [`RATIO_TOLERANCE`] of its neighbours' mean is a skip ([`Skip`]), and the position
+//! channels of its trial are put on the log's rows: each row's reading at its time from
+//! the skips around it (`d` from the next skip, or the session's median spacing of
+//! skips), and each row's value the cubic through the four readings around it at their
+//! times. A log without the reference columns cannot show a skip, and its skips are put
+//! back as lost samples, as before. A clock within about 100 ppm of the log's skips at
+//! most once a trial: the readings either side of it are put a row apart in age, and
+//! the age's slow drift within the trial, unseen, is left
+//! (`hil/docs/notes/2026-12-07-one-sensor-two-channels.md`).
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
@@ -86,6 +109,20 @@ pub struct Slip {
     pub samples: usize,
     /// The position's extra step there (the faster channel's), m.
     pub step_m: f64,
+}
+
+/// A reading the position sensor skipped: its clock runs faster than the log's, and the
+/// controller's reference (on the log's clock) stepped on as before while the
+/// position stepped twice (module docs, "A position sensor faster than the log").
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Skip {
+    /// The trial's file, as the manifest names it.
+    pub file: String,
+    /// The recorded row that shows the reading after the skipped one (0 for the first
+    /// after the header).
+    pub row: usize,
+    /// That row's time in its trial as recorded, s.
+    pub t_s: f64,
 }
 
 /// A frame the logger wrote twice, taken out before the fits.
@@ -193,6 +230,26 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, usize, f64)> {
     rows
 }
 
+/// Whether the controller's reference position (`ref_x_m`, `ref_y_m`, where logged)
+/// steps into row `i` as its neighbours do, within [`RATIO_TOLERANCE`], where it moves
+/// by at least [`glitch::POSITION_FLOOR_M`] a row: the logger then lost no frame there,
+/// and a position that steps twice its neighbours' mean skipped a reading of its own.
+/// The reference is what the controller computed at each tick, on the log's clock; a
+/// lost frame stretches its step as it does the position's.
+fn reference_kept(trial: &Trial, i: usize) -> bool {
+    [&trial.ref_x_m, &trial.ref_y_m]
+        .into_iter()
+        .flatten()
+        .filter(|r| i >= 2 && i + 1 < r.len())
+        .map(|r| {
+            let mean = 0.5 * ((r[i - 1] - r[i - 2]) + (r[i + 1] - r[i]));
+            (mean, (r[i] - r[i - 1]) / mean)
+        })
+        .filter(|(mean, _)| mean.abs() >= glitch::POSITION_FLOOR_M)
+        .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()))
+        .is_some_and(|(_, ratio)| (ratio - 1.0).abs() < RATIO_TOLERANCE)
+}
+
 /// The values of the `lost` samples lost between `v[i − 1]` and `v[i]`: the cubic
 /// through rows `i − 2 … i + 1` at their true times `−1, 0, lost + 1, lost + 2`, at
 /// times `1 … lost` ([`glitch::gap_cubic`]; module docs). [`find`] gives rows
@@ -270,72 +327,173 @@ fn file_row(removed: &[usize], row: usize) -> usize {
         .fold(row, |r, &gone| if gone <= r { r + 1 } else { r })
 }
 
-/// What [`mend`] did to a trial: the file's rows of its repeated frames, each with its
-/// step, and the rows after which samples were lost, each with how many and the step.
-type Mended = (Vec<(usize, f64)>, Vec<(usize, usize, f64)>);
+/// One trial's finds: its repeated frames (the file's rows, steps); and on the rows of
+/// the trial with its repeats taken out (`work`, `None` when it has none; `removed`,
+/// the file's rows taken out), its lost runs (the rows after them, lengths, steps) and
+/// its position's skipped readings (rows).
+struct Found {
+    twice: Vec<(usize, f64)>,
+    lost: Vec<(usize, usize, f64)>,
+    skips: Vec<usize>,
+    work: Option<Trial>,
+    removed: Vec<usize>,
+}
 
-/// `trial` with its repeated frames taken out (when `search_repeats`) and its lost
-/// samples put back, time renumbered at `period_s` (`None` when it has neither), and
-/// the file's rows of each (module docs).
-fn mend(trial: &Trial, search_repeats: bool, period_s: f64) -> (Option<Trial>, Mended) {
+/// What [`repair`] finds in one trial (module docs): repeated frames when
+/// `search_repeats`, then lost runs, and among single lost samples those the
+/// controller's reference disowns ([`reference_kept`]): a position sensor's skipped
+/// readings.
+fn look(trial: &Trial, search_repeats: bool, period_s: f64) -> Found {
     let twice = if search_repeats {
         find_repeats(trial)
     } else {
         Vec::new()
     };
     let removed: Vec<usize> = twice.iter().map(|r| r.0).collect();
-    let kept;
-    let work = if removed.is_empty() {
-        trial
-    } else {
-        kept = without(trial, &removed, period_s);
-        &kept
-    };
-    let rows = find(&work.x_m, &work.y_m);
-    let lost: Vec<(usize, usize, f64)> = rows
-        .iter()
-        .map(|&(row, n, step)| (file_row(&removed, row - 1), n, step))
-        .collect();
-    let mended = if rows.is_empty() && removed.is_empty() {
-        None
-    } else {
-        let runs: Vec<(usize, usize)> = rows.iter().map(|r| (r.0, r.1)).collect();
-        Some(repaired(work, &runs, period_s))
-    };
-    (mended, (twice, lost))
+    let work = (!removed.is_empty()).then(|| without(trial, &removed, period_s));
+    let on = work.as_ref().unwrap_or(trial);
+    let (skips, lost): (Vec<_>, Vec<_>) = find(&on.x_m, &on.y_m)
+        .into_iter()
+        .partition(|&(row, n, _)| n == 1 && reference_kept(on, row));
+    Found {
+        twice,
+        lost,
+        skips: skips.into_iter().map(|r| r.0).collect(),
+        work,
+        removed,
+    }
 }
 
-/// The session with every repeated frame taken out and every lost sample put back
-/// (module docs), the slips and the repeats, each in trial and row order, with the
-/// file's rows; `None` in place of the session when it has neither (the caller keeps
-/// its own). Trials with a held channel (`held`, from [`super::hold::find`]) are not
+/// The session with every repeated frame taken out, every lost sample put back and
+/// the position of a sensor that skipped readings put at the log's rows (module docs),
+/// the slips, the repeats and the skips, each in trial and row order, with the file's
+/// rows; `None` in place of the session when it has none of them (the caller keeps its
+/// own). Trials with a held channel (`held`, from [`super::hold::find`]) are not
 /// searched for repeats.
 #[must_use]
-pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Vec<Slip>, Vec<Repeat>) {
+pub fn repair(
+    session: &Session,
+    held: &Readings,
+) -> (Option<Session>, Vec<Slip>, Vec<Repeat>, Vec<Skip>) {
     let period_s = 1.0 / session.manifest.rate_hz;
-    let (mut slips, mut repeats) = (Vec::new(), Vec::new());
+    let found: Vec<Found> = session
+        .trials
+        .iter()
+        .enumerate()
+        .map(|(index, trial)| look(trial, !held.any_held(index), period_s))
+        .collect();
+    let spacing = skip_spacing(&found, session);
+    let (mut slips, mut repeats, mut skips) = (Vec::new(), Vec::new(), Vec::new());
     let mut copy: Option<Session> = None;
-    for (index, (entry, trial)) in session.iter().enumerate() {
-        let search = !held.any_held(index);
-        let (mended, (twice, lost)) = mend(trial, search, period_s);
-        repeats.extend(twice.into_iter().map(|(row, step_m)| Repeat {
+    for (index, ((entry, trial), f)) in session.iter().zip(found).enumerate() {
+        let file_row = |r: usize| file_row(&f.removed, r);
+        repeats.extend(f.twice.iter().map(|&(row, step_m)| Repeat {
             file: entry.file.clone(),
             row,
             t_s: trial.t_s[row],
             step_m,
         }));
-        slips.extend(lost.into_iter().map(|(after_row, samples, step_m)| Slip {
-            file: entry.file.clone(),
-            after_row,
-            t_s: trial.t_s[after_row],
-            samples,
-            step_m,
+        slips.extend(f.lost.iter().map(|&(row, samples, step_m)| {
+            let after_row = file_row(row - 1);
+            Slip {
+                file: entry.file.clone(),
+                after_row,
+                t_s: trial.t_s[after_row],
+                samples,
+                step_m,
+            }
         }));
-        if let Some(t) = mended {
+        skips.extend(f.skips.iter().map(|&row| Skip {
+            file: entry.file.clone(),
+            row: file_row(row),
+            t_s: trial.t_s[file_row(row)],
+        }));
+        if let Some(t) = mended(trial, f, spacing, period_s) {
             copy.get_or_insert_with(|| session.clone()).trials[index] = t;
         }
     }
-    (copy, slips, repeats)
+    (copy, slips, repeats, skips)
+}
+
+/// `trial` mended by what [`look`] found in it, `f`: its repeats taken out, its
+/// position retimed at its skips ([`retimed`], `spacing` rows between skips), its lost
+/// samples put back, its time renumbered at `period_s`; `None` when `f` found nothing.
+fn mended(trial: &Trial, f: Found, spacing: f64, period_s: f64) -> Option<Trial> {
+    if f.removed.is_empty() && f.lost.is_empty() && f.skips.is_empty() {
+        return None;
+    }
+    let mut work = f.work.unwrap_or_else(|| trial.clone());
+    if !f.skips.is_empty() {
+        work.x_m = retimed(&work.x_m, &f.skips, spacing);
+        work.y_m = retimed(&work.y_m, &f.skips, spacing);
+    }
+    let runs: Vec<(usize, usize)> = f.lost.iter().map(|r| (r.0, r.1)).collect();
+    Some(repaired(&work, &runs, period_s))
+}
+
+/// The rows between a position sensor's skipped readings: the median spacing of
+/// consecutive skips within the session's trials where at least [`MIN_SPACINGS`]
+/// exist; else the longest trial's rows (a clock so near the log's that a trial holds
+/// at most one skip: the readings' age then changes by little within a trial).
+fn skip_spacing(found: &[Found], session: &Session) -> f64 {
+    let mut spacings: Vec<f64> = found
+        .iter()
+        .flat_map(|f| f.skips.windows(2).map(|w| (w[1] - w[0]) as f64))
+        .collect();
+    if spacings.len() >= MIN_SPACINGS {
+        super::stats::upper_median(&mut spacings)
+    } else {
+        session
+            .trials
+            .iter()
+            .map(|t| t.x_m.len() as f64)
+            .fold(1.0, f64::max)
+    }
+}
+
+/// The fewest spacings between skips from which their median is the clock's.
+pub const MIN_SPACINGS: usize = 3;
+
+/// A position channel `v` whose sensor skipped a reading at each of `skips` (ascending
+/// rows), on the log's rows (module docs): each row's reading is `a` of a row old,
+/// `a` rising from 0 at a skip by one row over the spacing to the next (`spacing` past
+/// the last and before the first, or where the next is more than half as far again
+/// away: a skip not seen), and each row's value is the cubic through the four readings
+/// around it at their times.
+fn retimed(v: &[f64], skips: &[usize], spacing: f64) -> Vec<f64> {
+    let n = v.len();
+    if n < 4 || skips.is_empty() {
+        return v.to_vec();
+    }
+    let times: Vec<f64> = (0..n)
+        .map(|k| {
+            let at = skips.partition_point(|&s| s <= k);
+            // The skip this row's run of readings began at (one unseen, a spacing
+            // before the first), and the rows to the next.
+            let (from, span) = if at == 0 {
+                (skips[0] as f64 - spacing, spacing)
+            } else {
+                let s = skips[at - 1];
+                let span = skips
+                    .get(at)
+                    .map(|&next| (next - s) as f64)
+                    .filter(|d| *d < 1.5 * spacing)
+                    .unwrap_or(spacing);
+                (s as f64, span)
+            };
+            // A run of `span` rows holds `span + 1` readings: each row's is 1/(span + 1)
+            // of a row older than the last's, from half that at the skip.
+            let age = ((k as f64 - from + 0.5) / (span + 1.0)).rem_euclid(1.0);
+            k as f64 - age
+        })
+        .collect();
+    (0..n)
+        .map(|k| {
+            let start = k.saturating_sub(1).min(n - 4);
+            let nodes = start..start + 4;
+            super::hold::lagrange(&times[nodes.clone()], &v[nodes], k as f64)
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -428,6 +586,25 @@ mod tests {
         assert!(find(&x, &one).is_empty());
     }
 
+    /// [`look`] and [`mended`] on one trial (its skips spaced by its length): the
+    /// mended trial, its repeats, and its lost runs with the file's row before each.
+    #[allow(clippy::type_complexity)]
+    fn mend(
+        trial: &Trial,
+        search: bool,
+        period_s: f64,
+    ) -> (Option<Trial>, (Vec<(usize, f64)>, Vec<(usize, usize, f64)>)) {
+        let f = look(trial, search, period_s);
+        let twice = f.twice.clone();
+        let lost = f
+            .lost
+            .iter()
+            .map(|&(row, n, step)| (file_row(&f.removed, row - 1), n, step))
+            .collect();
+        let spacing = trial.x_m.len() as f64;
+        (mended(trial, f, spacing, period_s), (twice, lost))
+    }
+
     /// A trial of `x, y` and a force of 0.05 N of noise on each axis, as a rig read at
     /// every row records it.
     fn trial_of(x: Vec<f64>, y: Vec<f64>, seed: u64) -> Trial {
@@ -444,6 +621,70 @@ mod tests {
             x_m: x,
             y_m: y,
             ..Trial::default()
+        }
+    }
+
+    #[test]
+    fn a_position_sensor_faster_than_the_log_is_retimed_not_put_back() {
+        // A position sensor at 1010 Hz (a reading every 0.99 rows): the log shows the
+        // latest, so one reading in a hundred is never shown and the rest are up to a
+        // row old. The controller's reference (the reach on the log's clock) steps on.
+        for seed in 0..4 {
+            let period = 0.99;
+            let taken: Vec<f64> = (0..2100).map(|j| j as f64 * period - 0.63).collect();
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            let xs = reaches::noisy(&mut rng, 0.1, 0.0, taken.iter().copied());
+            let ys = reaches::noisy(&mut rng, 0.25, 0.0, taken.iter().copied());
+            let shown: Vec<usize> = (0..2000)
+                .map(|k| taken.partition_point(|&t| t <= k as f64) - 1)
+                .collect();
+            let mut t = trial_of(
+                shown.iter().map(|&j| xs[j]).collect(),
+                shown.iter().map(|&j| ys[j]).collect(),
+                seed,
+            );
+            let reach = |extent: f64| -> Vec<f64> {
+                (0..2000)
+                    .map(|k| reaches::min_jerk(extent, 0.0, f64::from(k) / reaches::RATE_HZ))
+                    .collect()
+            };
+            t.ref_x_m = Some(reach(0.1));
+            t.ref_y_m = Some(reach(0.25));
+            let f = look(&t, true, 1e-3);
+            // The skips where the reach moves faster than 20 µm a row, found as such
+            // (none as a lost sample), one reading in a hundred.
+            assert!(f.lost.is_empty(), "seed {seed}: {:?}", f.lost);
+            let skipped: Vec<usize> = (1..2000)
+                .filter(|&k| shown[k] == shown[k - 1] + 2)
+                .collect();
+            assert!(f.skips.len() >= 4, "seed {seed}: {:?}", f.skips);
+            assert!(f.skips.iter().all(|s| skipped.contains(s)), "seed {seed}");
+            let (first, last) = (f.skips[0], f.skips[f.skips.len() - 1]);
+            let spacing = 1.0 / (1.0 - period);
+            let fixed = mended(&t, f, spacing, 1e-3).unwrap();
+            // Between the first and the last skip: as shown, up to a row's travel off
+            // the reach on the log's rows (0.78 mm at peak speed); retimed, within the
+            // age's error, at most half of 1/101 of a row (3.9 µm at peak speed), and
+            // the cubic's weights on the 0.3 µm noise: 6 µm.
+            let truth = reach(0.25);
+            let off = |v: &[f64]| {
+                (first..last)
+                    .map(|k| (v[k] - truth[k]).abs())
+                    .fold(0.0, f64::max)
+            };
+            assert!(off(&t.y_m) > 0.3e-3, "seed {seed}: {}", off(&t.y_m));
+            assert!(off(&fixed.y_m) < 6e-6, "seed {seed}: {}", off(&fixed.y_m));
+            // The force is untouched, row for row.
+            assert_eq!(fixed.fx_n, t.fx_n);
+            // A frame the logger lost (every column, the reference too) is still a
+            // lost sample.
+            let lost = each_column(&t, |v| drop_row(v, last + 10), 1e-3);
+            let g = look(&lost, true, 1e-3);
+            assert_eq!(
+                g.lost.iter().map(|r| r.0).collect::<Vec<_>>(),
+                vec![last + 10],
+                "seed {seed}"
+            );
         }
     }
 
