@@ -339,6 +339,15 @@ struct Found {
     removed: Vec<usize>,
 }
 
+impl Found {
+    /// Its lost runs with the file's row after which each was lost, its length and step.
+    fn lost_in_file(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        self.lost
+            .iter()
+            .map(|&(row, n, step)| (file_row(&self.removed, row - 1), n, step))
+    }
+}
+
 /// What [`repair`] finds in one trial (module docs): repeated frames when
 /// `search_repeats`, then lost runs, and among single lost samples those the
 /// controller's reference disowns ([`reference_kept`]): a position sensor's skipped
@@ -386,27 +395,26 @@ pub fn repair(
     let (mut slips, mut repeats, mut skips) = (Vec::new(), Vec::new(), Vec::new());
     let mut copy: Option<Session> = None;
     for (index, ((entry, trial), f)) in session.iter().zip(found).enumerate() {
-        let file_row = |r: usize| file_row(&f.removed, r);
         repeats.extend(f.twice.iter().map(|&(row, step_m)| Repeat {
             file: entry.file.clone(),
             row,
             t_s: trial.t_s[row],
             step_m,
         }));
-        slips.extend(f.lost.iter().map(|&(row, samples, step_m)| {
-            let after_row = file_row(row - 1);
-            Slip {
-                file: entry.file.clone(),
-                after_row,
-                t_s: trial.t_s[after_row],
-                samples,
-                step_m,
-            }
-        }));
-        skips.extend(f.skips.iter().map(|&row| Skip {
+        slips.extend(f.lost_in_file().map(|(after_row, samples, step_m)| Slip {
             file: entry.file.clone(),
-            row: file_row(row),
-            t_s: trial.t_s[file_row(row)],
+            after_row,
+            t_s: trial.t_s[after_row],
+            samples,
+            step_m,
+        }));
+        skips.extend(f.skips.iter().map(|&row| {
+            let row = file_row(&f.removed, row);
+            Skip {
+                file: entry.file.clone(),
+                row,
+                t_s: trial.t_s[row],
+            }
         }));
         if let Some(t) = mended(trial, f, spacing, period_s) {
             copy.get_or_insert_with(|| session.clone()).trials[index] = t;
@@ -455,10 +463,11 @@ fn skip_spacing(found: &[Found], session: &Session) -> f64 {
 pub const MIN_SPACINGS: usize = 3;
 
 /// A position channel `v` whose sensor skipped a reading at each of `skips` (ascending
-/// rows), on the log's rows (module docs): each row's reading is `a` of a row old,
-/// `a` rising from 0 at a skip by one row over the spacing to the next (`spacing` past
-/// the last and before the first, or where the next is more than half as far again
-/// away: a skip not seen), and each row's value is the cubic through the four readings
+/// rows), on the log's rows (module docs): each row's reading is `a` of a row old, `a`
+/// rising from half of `1/(d + 1)` at a skip by `1/(d + 1)` a row to the next skip `d`
+/// rows on (a run of `d` rows shows `d + 1` readings; `d` is `spacing` past the last
+/// skip and before the first, and where the next is more than half as far again away:
+/// a skip not seen), and each row's value is the cubic through the four readings
 /// around it at their times.
 fn retimed(v: &[f64], skips: &[usize], spacing: f64) -> Vec<f64> {
     let n = v.len();
@@ -596,11 +605,7 @@ mod tests {
     ) -> (Option<Trial>, (Vec<(usize, f64)>, Vec<(usize, usize, f64)>)) {
         let f = look(trial, search, period_s);
         let twice = f.twice.clone();
-        let lost = f
-            .lost
-            .iter()
-            .map(|&(row, n, step)| (file_row(&f.removed, row - 1), n, step))
-            .collect();
+        let lost = f.lost_in_file().collect();
         let spacing = trial.x_m.len() as f64;
         (mended(trial, f, spacing, period_s), (twice, lost))
     }
