@@ -94,6 +94,7 @@ use super::hand_joint::{HandJoint, HandJointFit, HandMember, fit_on_units, settl
 use super::hand_library::{HAND_LIBRARY, HandTerm, MAX_HAND_TERMS};
 use super::hold::{self, Held};
 use super::joint::{Joint, Member, MemberParameters, refine};
+use super::jump::Jump;
 use super::ripple::ForceRipple;
 use super::rotation::SensorRotation;
 use super::signals::BalanceSignals;
@@ -481,6 +482,11 @@ pub struct Diagnosis {
     /// cannot show them).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub skipped_readings: Vec<Skip>,
+    /// Jumps of a position encoder's count (`super::jump`): the position stepped once
+    /// by a burst of counts and stayed off by it. The channel is levelled from the jump
+    /// on before the fits; the files are unchanged. Absent for a log without them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub encoder_jumps: Vec<Jump>,
     /// Sentences a person can check.
     pub evidence: Vec<String>,
 }
@@ -1469,7 +1475,13 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
     let session = bridged.as_ref().unwrap_or(session);
     let (filled, held) = hold::fill_session(session, &readings);
     let session = filled.as_ref().unwrap_or(session);
-    let (repaired, slips, repeats, skips) = slip::repair(session, &readings);
+    let (repaired, repairs) = slip::repair(session, &readings);
+    let slip::Repairs {
+        slips,
+        repeats,
+        skips,
+        jumps,
+    } = repairs;
     let session = repaired.as_ref().unwrap_or(session);
     let (mut a, residuals) = diagnose_units(session, opts, &[])?;
     let faults = faults(&residuals);
@@ -1516,6 +1528,10 @@ pub fn diagnose(session: &Session, opts: &DiagnoseOptions) -> Result<Analysis, D
         d.evidence.push(skip_evidence(&skips));
     }
     d.skipped_readings = skips;
+    if !jumps.is_empty() {
+        d.evidence.push(jump_evidence(&jumps));
+    }
+    d.encoder_jumps = jumps;
     Ok(a)
 }
 
@@ -1594,6 +1610,7 @@ fn diagnose_units(
         held: Vec::new(),
         slips: Vec::new(),
         skipped_readings: Vec::new(),
+        encoder_jumps: Vec::new(),
         repeated_frames: Vec::new(),
         evidence: Vec::new(),
     };
@@ -1809,6 +1826,29 @@ fn skip_evidence(skips: &[Skip]) -> String {
          before the fits (the files are unchanged): {}",
         skips.len(),
         first_few(each, skips.len(), "skipped_readings")
+    )
+}
+
+/// The evidence sentence for the encoder's jumps levelled: how many, and the first few
+/// with file, channel, row, time and size.
+fn jump_evidence(jumps: &[Jump]) -> String {
+    let each = jumps.iter().map(|j| {
+        format!(
+            "{} {} row {} ({:.4} s; {:+.3} mm)",
+            j.file,
+            j.channel,
+            j.row,
+            j.t_s,
+            j.step_m * 1e3
+        )
+    });
+    format!(
+        "{} jump(s) of a position encoder's count levelled before the fits (the position \
+         stepped once, within a row, and stayed off by the step, a speed no motion \
+         reaches; the channel moved back by it from that row on; the files are \
+         unchanged): {}",
+        jumps.len(),
+        first_few(each, jumps.len(), "encoder_jumps")
     )
 }
 

@@ -46,6 +46,7 @@ mod hand_library;
 mod hand_signals;
 pub mod hold;
 mod joint;
+pub mod jump;
 mod model;
 pub mod plots;
 mod predict;

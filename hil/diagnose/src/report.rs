@@ -123,6 +123,26 @@ pub fn table(d: &Diagnosis) -> String {
             s.after_row
         );
     }
+    if let Some(s) = d.skipped_readings.first() {
+        let _ = writeln!(
+            out,
+            "skipped readings  {} (a position sensor on a clock faster than the log's), the position retimed to the log's rows, the first {} row {} (all in the evidence and `skipped_readings` of --json)",
+            d.skipped_readings.len(),
+            s.file,
+            s.row
+        );
+    }
+    if let Some(j) = d.encoder_jumps.first() {
+        let _ = writeln!(
+            out,
+            "encoder jumps  {} levelled (a position that stepped once and stayed off: counts gained or lost), the first {} {} row {} by {:+.3} mm (all in the evidence and `encoder_jumps` of --json)",
+            d.encoder_jumps.len(),
+            j.file,
+            j.channel,
+            j.row,
+            j.step_m * 1e3
+        );
+    }
     for h in &d.held {
         let caveat = h
             .timing_caveat()

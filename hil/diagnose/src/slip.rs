@@ -77,12 +77,17 @@
 //! most once a trial: the readings either side of it are put a row apart in age, and
 //! the age's slow drift within the trial, unseen, is left
 //! (`hil/docs/notes/2026-12-07-one-sensor-two-channels.md`).
+//!
+//! **A lone spike in a position's step that is neither** (not a whole number of the
+//! neighbours' mean, or the other channel not stretched alike) is an encoder's count
+//! jump, levelled in that channel before the rest is mended ([`super::jump`]).
 
 use rigtwin_session::{Session, Trial};
 use serde::Serialize;
 
 use super::glitch;
 use super::hold::Readings;
+use super::jump::{self, Jump};
 
 /// The longest run of lost (or repeated) samples searched, the longest run the glitch
 /// rule bridges ([`super::glitch::MAX_RUN`]): a longer gap is a trial the logger broke,
@@ -198,18 +203,10 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, usize, f64)> {
     }
     let step = |p: &[f64]| -> Vec<f64> { p[..n].windows(2).map(|w| w[1] - w[0]).collect() };
     let (dx, dy) = (step(x), step(y));
-    // d[k] is the step into row k + 1.
-    // Lone spikes in the step, inside the trial (the glitch rule's runs of one).
-    let spikes = |d: &[f64]| -> Vec<usize> {
-        glitch::find(d, glitch::POSITION_FLOOR_M)
-            .into_iter()
-            .filter(|&(k, len)| len == 1 && k >= 1 && k + 1 < d.len())
-            .map(|(k, _)| k)
-            .collect()
-    };
+    // d[k] is the step into row k + 1; a lone spike in it leads into row k + 1.
     let mut rows: Vec<(usize, usize, f64)> = Vec::new();
-    for (fast, slow) in [(&dx, &dy), (&dy, &dx)] {
-        for k in spikes(fast) {
+    for (fast, slow, p) in [(&dx, &dy, x), (&dy, &dx, y)] {
+        for k in jump::spikes(&p[..n]).into_iter().map(|(row, _)| row - 1) {
             let mean = |d: &[f64]| 0.5 * (d[k - 1] + d[k + 1]);
             let (mf, ms) = (mean(fast), mean(slow));
             if mf.abs() < ms.abs() {
@@ -329,12 +326,13 @@ fn file_row(removed: &[usize], row: usize) -> usize {
 
 /// One trial's finds: its repeated frames (the file's rows, steps); and on the rows of
 /// the trial with its repeats taken out (`work`, `None` when it has none; `removed`,
-/// the file's rows taken out), its lost runs (the rows after them, lengths, steps) and
-/// its position's skipped readings (rows).
+/// the file's rows taken out), its lost runs (the rows after them, lengths, steps), its
+/// position's skipped readings (rows) and its encoder's jumps (channel, row, step).
 struct Found {
     twice: Vec<(usize, f64)>,
     lost: Vec<(usize, usize, f64)>,
     skips: Vec<usize>,
+    jumps: Vec<(&'static str, usize, f64)>,
     work: Option<Trial>,
     removed: Vec<usize>,
 }
@@ -349,9 +347,10 @@ impl Found {
 }
 
 /// What [`repair`] finds in one trial (module docs): repeated frames when
-/// `search_repeats`, then lost runs, and among single lost samples those the
-/// controller's reference disowns ([`reference_kept`]): a position sensor's skipped
-/// readings.
+/// `search_repeats`, then lost runs, among single lost samples those the controller's
+/// reference disowns ([`reference_kept`]): a position sensor's skipped readings, and the
+/// lone spikes in a position's step that are neither: its encoder's jumps
+/// ([`super::jump`]).
 fn look(trial: &Trial, search_repeats: bool, period_s: f64) -> Found {
     let twice = if search_repeats {
         find_repeats(trial)
@@ -364,26 +363,48 @@ fn look(trial: &Trial, search_repeats: bool, period_s: f64) -> Found {
     let (skips, lost): (Vec<_>, Vec<_>) = find(&on.x_m, &on.y_m)
         .into_iter()
         .partition(|&(row, n, _)| n == 1 && reference_kept(on, row));
+    let claimed = |row: usize| lost.iter().chain(&skips).any(|r| r.0 == row);
+    let mut jumps: Vec<(&'static str, usize, f64)> = [("x_m", &on.x_m), ("y_m", &on.y_m)]
+        .into_iter()
+        .flat_map(|(channel, p)| {
+            jump::spikes(p)
+                .into_iter()
+                .filter(|&(row, _)| !claimed(row))
+                .map(move |(row, step)| (channel, row, step))
+        })
+        .collect();
+    jumps.sort_by_key(|j| j.1);
     Found {
         twice,
         lost,
         skips: skips.into_iter().map(|r| r.0).collect(),
+        jumps,
         work,
         removed,
     }
 }
 
-/// The session with every repeated frame taken out, every lost sample put back and
-/// the position of a sensor that skipped readings put at the log's rows (module docs),
-/// the slips, the repeats and the skips, each in trial and row order, with the file's
-/// rows; `None` in place of the session when it has none of them (the caller keeps its
-/// own). Trials with a held channel (`held`, from [`super::hold::find`]) are not
-/// searched for repeats.
+/// What [`repair`] found and mended, each list in trial and row order, with the file's
+/// rows.
+#[derive(Debug, Default)]
+pub struct Repairs {
+    /// The runs of lost samples put back.
+    pub slips: Vec<Slip>,
+    /// The repeated frames taken out.
+    pub repeats: Vec<Repeat>,
+    /// The position sensor's skipped readings, its position retimed.
+    pub skips: Vec<Skip>,
+    /// The position encoder's jumps, levelled ([`super::jump`]).
+    pub jumps: Vec<Jump>,
+}
+
+/// The session with every repeated frame taken out, every lost sample put back, the
+/// position of a sensor that skipped readings put at the log's rows and every encoder
+/// jump levelled (module docs), and what was found; `None` in place of the session when
+/// nothing was (the caller keeps its own). Trials with a held channel (`held`, from
+/// [`super::hold::find`]) are not searched for repeats.
 #[must_use]
-pub fn repair(
-    session: &Session,
-    held: &Readings,
-) -> (Option<Session>, Vec<Slip>, Vec<Repeat>, Vec<Skip>) {
+pub fn repair(session: &Session, held: &Readings) -> (Option<Session>, Repairs) {
     let period_s = 1.0 / session.manifest.rate_hz;
     let found: Vec<Found> = session
         .trials
@@ -392,45 +413,71 @@ pub fn repair(
         .map(|(index, trial)| look(trial, !held.any_held(index), period_s))
         .collect();
     let spacing = skip_spacing(&found, session);
-    let (mut slips, mut repeats, mut skips) = (Vec::new(), Vec::new(), Vec::new());
+    let mut all = Repairs::default();
     let mut copy: Option<Session> = None;
     for (index, ((entry, trial), f)) in session.iter().zip(found).enumerate() {
-        repeats.extend(f.twice.iter().map(|&(row, step_m)| Repeat {
-            file: entry.file.clone(),
-            row,
-            t_s: trial.t_s[row],
-            step_m,
-        }));
-        slips.extend(f.lost_in_file().map(|(after_row, samples, step_m)| Slip {
-            file: entry.file.clone(),
-            after_row,
-            t_s: trial.t_s[after_row],
-            samples,
-            step_m,
-        }));
-        skips.extend(f.skips.iter().map(|&row| {
+        let file = || entry.file.clone();
+        all.repeats
+            .extend(f.twice.iter().map(|&(row, step_m)| Repeat {
+                file: file(),
+                row,
+                t_s: trial.t_s[row],
+                step_m,
+            }));
+        all.slips
+            .extend(f.lost_in_file().map(|(after_row, samples, step_m)| Slip {
+                file: file(),
+                after_row,
+                t_s: trial.t_s[after_row],
+                samples,
+                step_m,
+            }));
+        all.skips.extend(f.skips.iter().map(|&row| {
             let row = file_row(&f.removed, row);
             Skip {
-                file: entry.file.clone(),
+                file: file(),
                 row,
                 t_s: trial.t_s[row],
             }
         }));
+        all.jumps
+            .extend(f.jumps.iter().map(|&(channel, row, step_m)| {
+                let row = file_row(&f.removed, row);
+                Jump {
+                    file: file(),
+                    channel,
+                    row,
+                    t_s: trial.t_s[row],
+                    step_m,
+                }
+            }));
         if let Some(t) = mended(trial, f, spacing, period_s) {
             copy.get_or_insert_with(|| session.clone()).trials[index] = t;
         }
     }
-    (copy, slips, repeats, skips)
+    (copy, all)
 }
 
 /// `trial` mended by what [`look`] found in it, `f`: its repeats taken out, its
-/// position retimed at its skips ([`retimed`], `spacing` rows between skips), its lost
-/// samples put back, its time renumbered at `period_s`; `None` when `f` found nothing.
+/// encoder's jumps levelled, its position retimed at its skips ([`retimed`], `spacing`
+/// rows between skips), its lost samples put back, its time renumbered at `period_s`;
+/// `None` when `f` found nothing.
 fn mended(trial: &Trial, f: Found, spacing: f64, period_s: f64) -> Option<Trial> {
-    if f.removed.is_empty() && f.lost.is_empty() && f.skips.is_empty() {
+    if f.removed.is_empty() && f.lost.is_empty() && f.skips.is_empty() && f.jumps.is_empty() {
         return None;
     }
     let mut work = f.work.unwrap_or_else(|| trial.clone());
+    for (channel, p) in [("x_m", &mut work.x_m), ("y_m", &mut work.y_m)] {
+        let here: Vec<(usize, f64)> = f
+            .jumps
+            .iter()
+            .filter(|j| j.0 == channel)
+            .map(|j| (j.1, j.2))
+            .collect();
+        if !here.is_empty() {
+            *p = jump::levelled(p, &here);
+        }
+    }
     if !f.skips.is_empty() {
         work.x_m = retimed(&work.x_m, &f.skips, spacing);
         work.y_m = retimed(&work.y_m, &f.skips, spacing);
