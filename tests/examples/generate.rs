@@ -9,6 +9,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/h --arm-inertia-scale 1.15
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/f --movement 1.0
 //! cargo run --release -p rigtwin-tests --example generate -- grip-compliance 3 /tmp/g --grip 1000,10
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/l --lateral
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -23,7 +24,8 @@
 //! segment masses and moments of inertia by `F` (a subject heavier or lighter than the
 //! tables the diagnosis assumes; default 1); `--movement SECONDS` sets the reach's
 //! duration (default the protocol's 3 s); `--grip N_PER_M,N_S_PER_M` hides a grip of that
-//! stiffness and damping instead of the drawn one (effect `grip-compliance` only). Prints
+//! stiffness and damping instead of the drawn one (effect `grip-compliance` only);
+//! `--lateral` lays the reaches along `x` instead of `y` (`Design::lateral`). Prints
 //! the session folder and what it hides.
 
 use rigtwin_tests::generator::{
@@ -33,7 +35,7 @@ use rigtwin_tests::generator::{
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -42,6 +44,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut pulse = None;
     let mut grip = None;
     let mut ideal = false;
+    let mut lateral = false;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
     let mut args = std::env::args().skip(1);
@@ -49,6 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         match a.as_str() {
             "--no-motor-noise" => motor_noise = false,
             "--ideal" => ideal = true,
+            "--lateral" => lateral = true,
             "--repetitions" => {
                 let n = args
                     .next()
@@ -121,6 +125,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     }
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
+    design.lateral = lateral;
     let out = std::path::Path::new(out.as_str());
     let g = match grip {
         Some((k, b)) if effect == "grip-compliance" => {

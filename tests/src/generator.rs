@@ -377,6 +377,10 @@ pub struct Design {
     /// The reach's duration, s; `None` keeps the protocol's (000_*: 3 s for 0.25 m).
     /// Most reaching studies move about three times faster.
     pub movement_s: Option<f64>,
+    /// Reaches along `x` instead of `y`: the protocol's 0.25 m from `[−0.125, 0]` to
+    /// `[0.125, 0]` m, the pulse fired where the measured `x` crosses −0.025 m, as a lab
+    /// that studies lateral reaches lays them out.
+    pub lateral: bool,
 }
 
 impl Design {
@@ -391,6 +395,7 @@ impl Design {
         rate_hz: 1000,
         arm_inertia_scale: 1.0,
         movement_s: None,
+        lateral: false,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -415,6 +420,7 @@ impl Design {
             rate_hz: 1000,
             arm_inertia_scale: 1.0,
             movement_s: None,
+            lateral: false,
         }
     }
 
@@ -552,6 +558,12 @@ pub fn generate_hidden(
     reach.repetitions = design.repetitions;
     if let Some(s) = design.movement_s {
         reach.movement_s = s;
+    }
+    if design.lateral {
+        reach.start_m = [-0.125, 0.0];
+        reach.goal_m = [0.125, 0.0];
+        reach.trigger_axis = rigtwin_device::config::Axis::X;
+        reach.trigger_position_m = -0.025;
     }
     let perturbed = reach.repetitions as usize * reach.angles_deg.len();
     reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);

@@ -3,13 +3,15 @@
 //!
 //! For a perturbed trial, the response is the difference between the trial and a
 //! reference of what it would have done unperturbed: the mean of the session's
-//! unperturbed trials, each aligned at its own crossing of the perturbed trial's `y` at
-//! the onset (the rig fires the pulse when the measured `y` crosses a line, so this is
-//! the same moment of the reach), and resampled at the perturbed trial's pace: a lab's
+//! unperturbed trials, each aligned at its own crossing of the perturbed trial's
+//! position along the reach at the onset (the rig fires the pulse when the measured
+//! position along the reach, `y` on the Börner rig, crosses a line, so this is the same
+//! moment of the reach; the axis is the one the session's trials span more,
+//! [`reach_axis`]), and resampled at the perturbed trial's pace: a lab's
 //! reaches vary in duration from trial to trial, and a reference that moves at the
 //! session's mean pace differs from a faster or slower trial by a velocity and a force
 //! that grow over the window, which the balance reads as a reflex's gain. With `κ` the
-//! ratio of the trial's speed along `y` to the reference's at the crossing
+//! ratio of the trial's speed along the reach to the reference's at the crossing
 //! ([`pace_ratio`]), the reference is read at `c + κ (i − k0)` and its velocities are
 //! scaled by `κ`, its accelerations by `κ²`, and its hand force as the rig's admittance
 //! renders a faster reach: the inertial part by `κ²`, the damping part by `κ`
@@ -491,7 +493,8 @@ where
 
 /// One trial's smoothed channels.
 struct Smoothed {
-    y_raw: Vec<f64>,
+    /// The recorded position along the session's reach axis ([`reach_axis`]), m.
+    along_raw: Vec<f64>,
     /// x, y, vx, vy, ax, ay, Fx, Fy (hand), Ḟx, Ḟy.
     ch: [Vec<f64>; 10],
 }
@@ -501,6 +504,7 @@ fn smooth(
     trial: &Trial,
     rate_hz: f64,
     handle_mass_kg: f64,
+    axis: usize,
 ) -> Result<Smoothed, DiscrepancyError> {
     let window = window_for_rate(rate_hz);
     if trial.len() < 2 * window + 2 {
@@ -535,7 +539,11 @@ fn smooth(
     // rate is then the one of the very signal the balance uses.
     let (fdx, fdy) = (gradient(&fx, dt), gradient(&fy, dt));
     Ok(Smoothed {
-        y_raw: trial.y_m.clone(),
+        along_raw: if axis == 0 {
+            trial.x_m.clone()
+        } else {
+            trial.y_m.clone()
+        },
         ch: [
             sg(&trial.x_m, 0)?,
             sg(&trial.y_m, 0)?,
@@ -564,6 +572,27 @@ fn interp(x: &[f64], t: f64) -> Option<f64> {
     }
 }
 
+/// The axis the session's reaches travel along, 0 for `x`, 1 for `y`: the one whose
+/// position spans more, summed over the trials (ties to `y`, the Börner rig's). A rig
+/// triggers its pulses on one axis's crossing of a line; that axis is the one the
+/// reach travels along, and the references are aligned on it.
+#[must_use]
+pub fn reach_axis(session: &Session) -> usize {
+    let span = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &x| {
+                (lo.min(x), hi.max(x))
+            });
+        if hi >= lo { hi - lo } else { 0.0 }
+    };
+    let (x, y) = session
+        .trials
+        .iter()
+        .fold((0.0, 0.0), |(x, y), t| (x + span(&t.x_m), y + span(&t.y_m)));
+    usize::from(x <= y)
+}
+
 /// First crossing of `level` by `y` in direction `dir` (sign of the rate), as a
 /// fractional index.
 fn crossing(y: &[f64], level: f64, dir: f64) -> Option<f64> {
@@ -575,18 +604,18 @@ fn crossing(y: &[f64], level: f64, dir: f64) -> Option<f64> {
 }
 
 /// Range of the pace ratio `κ` a reference is resampled at (the perturbed trial's
-/// speed over the reference's, both along `y` where they cross the onset's level). A
+/// speed over the reference's, both along the reach where they cross the onset's level). A
 /// lab's reaches vary in duration by ±10–20 % (the generator's `movement_spread` is
 /// 13 %); outside 0.7–1.4 the two reaches are not the same movement at another pace
 /// and the ratio is held at the edge.
 pub const PACE_RANGE: (f64, f64) = (0.7, 1.4);
-/// Slowest speed along `y` at the crossing for which the pace ratio is taken, m/s.
+/// Slowest speed along the reach at the crossing for which the pace ratio is taken, m/s.
 /// Below it (an onset near a reach's start or end, where the speed is a few cm/s and
 /// the ratio of two small numbers is noise) the reference keeps its own pace.
 pub const PACE_MIN_SPEED_M_S: f64 = 0.05;
 
-/// How fast the perturbed trial moves against a reference at the same `y`: the ratio
-/// of their speeds along `y`, within [`PACE_RANGE`]; 1 when either is slower than
+/// How fast the perturbed trial moves against a reference at the same point of the
+/// reach: the ratio of their speeds along it, within [`PACE_RANGE`]; 1 when either is slower than
 /// [`PACE_MIN_SPEED_M_S`] or they move in opposite directions.
 #[must_use]
 pub fn pace_ratio(v_trial_m_s: f64, v_reference_m_s: f64) -> f64 {
@@ -670,9 +699,12 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
         )));
     }
     use rayon::prelude::*;
+    let axis = reach_axis(session);
+    // The smoothed velocity along it.
+    let speed = 2 + axis;
     let refs: Vec<Smoothed> = unperturbed
         .par_iter()
-        .map(|(e, t)| smooth(e, t, rate, m_h))
+        .map(|(e, t)| smooth(e, t, rate, m_h, axis))
         .collect::<Result<_, _>>()?;
     let damping = session.manifest.device.damping_n_s_per_m;
     let lead = (HAND_LEAD_S * rate).ceil() as usize;
@@ -685,31 +717,31 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             let Some(pert) = &e.perturbation else {
                 return Ok(None);
             };
-            let p = smooth(e, t, rate, m_h)?;
+            let p = smooth(e, t, rate, m_h, axis)?;
             let t0 = t.t_s.first().copied().unwrap_or(0.0);
             let k0f = (pert.onset_s - t0) * rate;
             let k0 = k0f.ceil().max(0.0) as usize;
             if k0 < lead + half || k0 + len + half >= t.len() {
                 return Ok(None);
             }
-            let Some(level) = interp(&p.y_raw, k0f) else {
+            let Some(level) = interp(&p.along_raw, k0f) else {
                 return Ok(None);
             };
-            let dir = p.ch[3][k0].signum();
-            let v_trial = interp(&p.ch[3], k0f).unwrap_or(0.0);
+            let dir = p.ch[speed][k0].signum();
+            let v_trial = interp(&p.ch[speed], k0f).unwrap_or(0.0);
             let n = lead + len;
             // Each reference: where it crosses the onset's level, and its pace ratio.
             // Sample `i` of the trial reads the reference at `c + κ (i − k0f)`.
             let aligned: Vec<(usize, f64, f64)> = refs
                 .iter()
                 .enumerate()
-                .filter_map(|(u, r)| crossing(&r.y_raw, level, dir).map(|c| (u, c)))
+                .filter_map(|(u, r)| crossing(&r.along_raw, level, dir).map(|c| (u, c)))
                 .map(|(u, c)| {
-                    let kappa = pace_ratio(v_trial, interp(&refs[u].ch[3], c).unwrap_or(0.0));
+                    let kappa = pace_ratio(v_trial, interp(&refs[u].ch[speed], c).unwrap_or(0.0));
                     (u, c, kappa)
                 })
                 .filter(|(u, c, kappa)| {
-                    let last = refs[*u].y_raw.len() as f64 - 1.0;
+                    let last = refs[*u].along_raw.len() as f64 - 1.0;
                     let first = c - kappa * lead as f64;
                     first >= 0.0 && c + kappa * len as f64 <= last
                 })
