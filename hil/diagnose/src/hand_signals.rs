@@ -838,7 +838,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
     if responses.len() < MIN_PERTURBED {
         return Ok(HandData::Missing(format!(
             "only {} perturbed trials have a whole response window ({} s after the onset, {} s before) and \
-             at least {MIN_REFERENCES} unperturbed trials crossing the same y; needs {MIN_PERTURBED}",
+             at least {MIN_REFERENCES} unperturbed trials crossing the same point of the reach; needs {MIN_PERTURBED}",
             responses.len(),
             HAND_WINDOW_S,
             HAND_LEAD_S

@@ -981,7 +981,7 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          latency (≤ 0.25 ms, one control tick) are fitted; each candidate adds its terms; all fits are made on training trials and \
          judged on held-out trials ({} folds of whole trials).\n\nThe human-side effects are judged on the hand \
          balance: the response to each force pulse against the mean of the unperturbed trials aligned at the same \
-         y, `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
+         point of the reach (along the axis the reaches span more), `−ΔF_hand = M_arm Δa + D Δv + K Δx + S (p Δx + d Δv)(t − τ) + effect`, with the arm's endpoint inertia \
          `M_arm` and feedback shape `S` known from the segment lengths (muscles without tone at half weight in \
          `S`: they answer only their stretch) and `D`, `K` full 2×2 matrices, over {} s \
          after the onset. With opposite pulse directions in the session it is fitted on the odd part of each \
