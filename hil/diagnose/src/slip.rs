@@ -198,6 +198,13 @@ pub fn find_repeats(trial: &Trial) -> Vec<(usize, f64)> {
 #[must_use]
 pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, usize, f64)> {
     let n = x.len().min(y.len());
+    lost_among(x, y, &[jump::spikes(&x[..n]), jump::spikes(&y[..n])])
+}
+
+/// [`find`] on the lone spikes of each channel's step already found (`spikes`, of `x`
+/// then `y`, from [`jump::spikes`] on their first `min(len)` samples).
+fn lost_among(x: &[f64], y: &[f64], spikes: &[Vec<(usize, f64)>; 2]) -> Vec<(usize, usize, f64)> {
+    let n = x.len().min(y.len());
     if n < 8 {
         return Vec::new();
     }
@@ -205,8 +212,8 @@ pub fn find(x: &[f64], y: &[f64]) -> Vec<(usize, usize, f64)> {
     let (dx, dy) = (step(x), step(y));
     // d[k] is the step into row k + 1; a lone spike in it leads into row k + 1.
     let mut rows: Vec<(usize, usize, f64)> = Vec::new();
-    for (fast, slow, p) in [(&dx, &dy, x), (&dy, &dx, y)] {
-        for k in jump::spikes(&p[..n]).into_iter().map(|(row, _)| row - 1) {
+    for (fast, slow, spiked) in [(&dx, &dy, &spikes[0]), (&dy, &dx, &spikes[1])] {
+        for k in spiked.iter().map(|&(row, _)| row - 1) {
             let mean = |d: &[f64]| 0.5 * (d[k - 1] + d[k + 1]);
             let (mf, ms) = (mean(fast), mean(slow));
             if mf.abs() < ms.abs() {
@@ -360,14 +367,19 @@ fn look(trial: &Trial, search_repeats: bool, period_s: f64) -> Found {
     let removed: Vec<usize> = twice.iter().map(|r| r.0).collect();
     let work = (!removed.is_empty()).then(|| without(trial, &removed, period_s));
     let on = work.as_ref().unwrap_or(trial);
-    let (skips, lost): (Vec<_>, Vec<_>) = find(&on.x_m, &on.y_m)
+    // Every lone spike in a position's step is found once: lost samples, skipped
+    // readings and jumps are what each of them is.
+    let n = on.x_m.len().min(on.y_m.len());
+    let spikes = [jump::spikes(&on.x_m[..n]), jump::spikes(&on.y_m[..n])];
+    let (skips, lost): (Vec<_>, Vec<_>) = lost_among(&on.x_m, &on.y_m, &spikes)
         .into_iter()
         .partition(|&(row, n, _)| n == 1 && reference_kept(on, row));
     let claimed = |row: usize| lost.iter().chain(&skips).any(|r| r.0 == row);
-    let mut jumps: Vec<(&'static str, usize, f64)> = [("x_m", &on.x_m), ("y_m", &on.y_m)]
+    let mut jumps: Vec<(&'static str, usize, f64)> = ["x_m", "y_m"]
         .into_iter()
-        .flat_map(|(channel, p)| {
-            jump::spikes(p)
+        .zip(spikes)
+        .flat_map(|(channel, spiked)| {
+            spiked
                 .into_iter()
                 .filter(|&(row, _)| !claimed(row))
                 .map(move |(row, step)| (channel, row, step))
