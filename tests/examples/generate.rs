@@ -25,7 +25,9 @@
 //! tables the diagnosis assumes; default 1); `--movement SECONDS` sets the reach's
 //! duration (default the protocol's 3 s); `--grip N_PER_M,N_S_PER_M` hides a grip of that
 //! stiffness and damping instead of the drawn one (effect `grip-compliance` only);
-//! `--lateral` lays the reaches along `x` instead of `y` (`Design::lateral`). Prints
+//! `--lateral` lays the reaches along `x` instead of `y` (`Design::lateral`);
+//! `--cardinal` fires the pulses in four directions instead of eight
+//! (`Design::cardinal`). Prints
 //! the session folder and what it hides.
 
 use rigtwin_tests::generator::{
@@ -35,7 +37,7 @@ use rigtwin_tests::generator::{
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--cardinal]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -45,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut grip = None;
     let mut ideal = false;
     let mut lateral = false;
+    let mut cardinal = false;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
     let mut args = std::env::args().skip(1);
@@ -53,6 +56,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             "--no-motor-noise" => motor_noise = false,
             "--ideal" => ideal = true,
             "--lateral" => lateral = true,
+            "--cardinal" => cardinal = true,
             "--repetitions" => {
                 let n = args
                     .next()
@@ -126,6 +130,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
     design.lateral = lateral;
+    design.cardinal = cardinal;
     let out = std::path::Path::new(out.as_str());
     let g = match grip {
         Some((k, b)) if effect == "grip-compliance" => {

@@ -381,6 +381,10 @@ pub struct Design {
     /// `[0.125, 0]` m, the pulse fired where the measured `x` crosses −0.025 m, as a lab
     /// that studies lateral reaches lays them out.
     pub lateral: bool,
+    /// Pulses in the four cardinal directions (0, 90, 180, 270°) instead of the
+    /// protocol's eight, twice as many per direction (the same number of pulses): the
+    /// layout of many labs, two pairs of opposite directions.
+    pub cardinal: bool,
 }
 
 impl Design {
@@ -396,6 +400,7 @@ impl Design {
         arm_inertia_scale: 1.0,
         movement_s: None,
         lateral: false,
+        cardinal: false,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -421,6 +426,7 @@ impl Design {
             arm_inertia_scale: 1.0,
             movement_s: None,
             lateral: false,
+            cardinal: false,
         }
     }
 
@@ -558,6 +564,10 @@ pub fn generate_hidden(
     reach.repetitions = design.repetitions;
     if let Some(s) = design.movement_s {
         reach.movement_s = s;
+    }
+    if design.cardinal {
+        reach.angles_deg = vec![0.0, 90.0, 180.0, 270.0];
+        reach.repetitions *= 2;
     }
     if design.lateral {
         reach.start_m = [-0.125, 0.0];

@@ -396,9 +396,16 @@ pub struct Diagnosis {
     /// Perturbed trials whose response the hand balance used.
     pub hand_trials_used: usize,
     /// Units the hand balance is fitted and its gains measured on: pairs of opposite
-    /// pulse directions (the odd part of their mean responses), else pulse directions
-    /// (repetitions averaged) or single trials.
+    /// pulse directions (the odd part of their mean responses); with fewer than four
+    /// such pairs, single opposite pulses (the odd part of each pair of them, and then
+    /// [`Self::hand_single_odd_parts`]); else pulse directions (repetitions averaged) or
+    /// single trials.
     pub hand_units: usize,
+    /// Whether the hand balance's units are the odd parts of single opposite pulses
+    /// (the session has fewer than four pairs of opposite directions). Absent when
+    /// false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub hand_single_odd_parts: bool,
     /// Independent units the hand balance's significance is tested on (one per
     /// repetition of a pair of opposite directions), when the fitted units average
     /// repetitions.
@@ -1592,6 +1599,7 @@ fn diagnose_units(
         hand_trials_used: 0,
         hand_units: 0,
         hand_test_units: None,
+        hand_single_odd_parts: false,
         hand_baseline_nrmse: None,
         hand_noise_floor_nrmse: None,
         hand_baseline: BTreeMap::new(),
@@ -2260,6 +2268,7 @@ fn rank_hand(
                 .into_iter()
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
+            d.hand_single_odd_parts = h.odd_singles;
             let w = &h.whitening;
             d.hand_weighting_source = Some(w.source.as_str().to_string());
             d.hand_weighting = [
@@ -3202,6 +3211,10 @@ fn evidence(
                     "odd parts of the mean responses to opposite pulses, tested on {} repetitions",
                     r.units()
                 ),
+                None if h.odd_singles => {
+                    "odd parts of single opposite pulses (too few pairs of directions to average)"
+                        .to_string()
+                }
                 None => "averaged responses".to_string(),
             },
             super::hand_signals::HAND_WINDOW_S,

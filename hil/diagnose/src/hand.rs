@@ -66,8 +66,13 @@
 //! independent repetitions (the `i`-th pulse at `θ` with the `i`-th at `θ + 180°`, 12 on
 //! the shared protocol, [`ReplicateTest`]), leaving out one at a time, because four
 //! folds leave the t-test 3 degrees of freedom (critical t 5.14 for 7 candidates at
-//! α 0.05) where twelve leave it 11 (2.91). Without opposite pairs the responses are
-//! averaged by direction ([`average_by_angle`]) and the folds run over directions.
+//! α 0.05) where twelve leave it 11 (2.91). With fewer than four pairs (a lab's four
+//! cardinal directions make two) the fits run on the odd parts of single opposite
+//! pulses ([`odd_singles`]), in folds of them, at least eight; fitted on the responses
+//! themselves instead, the even terms pulled a 25 ms reflex to 13 ms and a 0.97 kg
+//! handle to 0.80 kg (`hil/docs/notes/2026-12-07-encoder-jumps-and-lateral-reaches.md`).
+//! Without opposite pairs the responses are averaged by direction
+//! ([`average_by_angle`]) and the folds run over directions.
 //!
 //! The weighting: every fit runs on rows whitened in time and between the axes
 //! ([`Whitening`], generalised least squares), because the residual is smooth (the arm's
@@ -110,7 +115,7 @@ use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::hand_signals::{
     HandArm, HandData, HandResponse, MUSCLE_PAIRS, OddUnits, average_by_angle, hand_responses,
-    lagged, odd_parts,
+    lagged, odd_parts, odd_singles,
 };
 use rigtwin_session::{Axes, Session};
 
@@ -1274,13 +1279,16 @@ impl ReplicateTest {
 #[derive(Debug)]
 pub struct HandJudgement {
     /// The units fitted: the odd parts of the mean responses to opposite pulses
-    /// (`odd_parts`), or the responses averaged by direction when the session has too
-    /// few opposite pairs (`average_by_angle`).
+    /// (`odd_parts`); with fewer pairs, those of single opposite pulses
+    /// (`odd_singles`, and then [`Self::odd_singles`]); without opposite pairs, the
+    /// responses averaged by direction (`average_by_angle`).
     pub responses: Vec<HandResponse>,
     /// The test on independent units, when the units above average repetitions
     /// (`OddUnits::Averaged`); `None` when the units are already independent, and
     /// then the folds above carry the test.
     pub replicates: Option<ReplicateTest>,
+    /// Whether [`Self::responses`] are the odd parts of single opposite pulses.
+    pub odd_singles: bool,
     /// Folds over [`Self::responses`].
     pub folds: Folds,
     /// Feedback delay chosen for the baseline, s.
@@ -1375,13 +1383,16 @@ pub fn judge_hand(
         ));
     }
     let arm = HandArm::from_session(session)?;
-    let (responses, replicates) = match hand_responses(session, &arm)? {
+    let (responses, replicates, singles) = match hand_responses(session, &arm)? {
         HandData::Responses(r) => match (
             odd_parts(&r, OddUnits::Averaged),
             odd_parts(&r, OddUnits::Replicates),
         ) {
-            (Some(avg), Some(rep)) => (avg, Some(rep)),
-            _ => (average_by_angle(r), None),
+            (Some(avg), Some(rep)) => (avg, Some(rep), false),
+            _ => match odd_singles(&r) {
+                Some(singles) => (singles, None, true),
+                None => (average_by_angle(r), None, false),
+            },
         },
         HandData::Missing(why) => return Ok(Err(why)),
     };
@@ -1482,6 +1493,7 @@ pub fn judge_hand(
     Ok(Ok(HandJudgement {
         responses,
         replicates,
+        odd_singles: singles,
         folds,
         fb_delay_s,
         whitening,

@@ -400,6 +400,31 @@ pub enum OddUnits {
 /// directions, or when the responses differ in shape.
 #[must_use]
 pub fn odd_parts(responses: &[HandResponse], units: OddUnits) -> Option<Vec<HandResponse>> {
+    odd_parts_of(responses, units, MIN_OPPOSITE_PAIRS)
+}
+
+/// Fewest single odd parts ([`odd_singles`]) a session with fewer than
+/// [`MIN_OPPOSITE_PAIRS`] pairs of directions is fitted on: the folds' default count,
+/// so that every fold holds out at least one.
+pub const MIN_ODD_SINGLES: usize = 8;
+
+/// The odd parts of single opposite pulses (`OddUnits::Replicates`) of a session with
+/// at least one but fewer than [`MIN_OPPOSITE_PAIRS`] pairs of directions (a lab's
+/// four cardinal directions make two), when they are at least [`MIN_ODD_SINGLES`]:
+/// too few pairs to fit on their means in folds of pairs, enough repetitions to fit
+/// on the single pairs in folds of them, which keeps what the odd part removes (the
+/// terms even in the pulse, the reference's noise). `None` otherwise.
+#[must_use]
+pub fn odd_singles(responses: &[HandResponse]) -> Option<Vec<HandResponse>> {
+    odd_parts_of(responses, OddUnits::Replicates, 1).filter(|u| u.len() >= MIN_ODD_SINGLES)
+}
+
+/// [`odd_parts`] with at least `min_pairs` pairs of directions.
+fn odd_parts_of(
+    responses: &[HandResponse],
+    units: OddUnits,
+    min_pairs: usize,
+) -> Option<Vec<HandResponse>> {
     let key = direction_key;
     if !same_shape(responses) {
         return None;
@@ -425,7 +450,7 @@ pub fn odd_parts(responses: &[HandResponse], units: OddUnits) -> Option<Vec<Hand
             ),
         }
     }
-    (pairs >= MIN_OPPOSITE_PAIRS).then_some(out)
+    (pairs >= min_pairs).then_some(out)
 }
 
 /// Half the difference of the mean responses `a` (at `θ`) and `b` (at `θ + 180°`), both
@@ -1056,6 +1081,40 @@ mod tests {
         assert!(odd_parts(&unpaired, OddUnits::Averaged).is_none());
         let few: Vec<HandResponse> = rs.into_iter().skip(3).collect();
         assert!(odd_parts(&few, OddUnits::Replicates).is_none());
+    }
+
+    /// Four cardinal directions (two opposite pairs, too few for `odd_parts`), `reps`
+    /// repetitions each: the single odd parts are the pairs' repetitions, each the odd
+    /// value exactly, when they are at least `MIN_ODD_SINGLES`; fewer give `None`, as
+    /// do directions without an opposite.
+    #[test]
+    fn few_opposite_pairs_give_the_odd_parts_of_single_pulses() {
+        let (odd, even) = (1.5, 4.0);
+        let cardinal = |reps: u32, angles: &[f64]| -> Vec<HandResponse> {
+            let mut rs = Vec::new();
+            for (k, angle) in angles.iter().enumerate() {
+                let sign = if *angle < 180.0 { 1.0 } else { -1.0 };
+                for i in 0..reps {
+                    rs.push(response(100 * k as u32 + i, *angle, even + sign * odd));
+                }
+            }
+            rs
+        };
+        let rs = cardinal(4, &[0.0, 90.0, 180.0, 270.0]);
+        assert!(odd_parts(&rs, OddUnits::Averaged).is_none());
+        let Some(units) = odd_singles(&rs) else {
+            panic!("two pairs of four repetitions make {MIN_ODD_SINGLES} single odd parts");
+        };
+        assert_eq!(units.len(), 8);
+        for u in &units {
+            assert_eq!(u.trials.len(), 2);
+            for ch in [&u.dx, &u.dv, &u.da, &u.df, &u.dfd] {
+                assert!(ch.iter().flatten().all(|v| (v - odd).abs() < 1e-12));
+            }
+            assert!(u.m_arm.iter().all(|m| (m[(0, 0)] - even).abs() < 1e-12));
+        }
+        assert!(odd_singles(&cardinal(3, &[0.0, 90.0, 180.0, 270.0])).is_none());
+        assert!(odd_singles(&cardinal(6, &[0.0, 90.0, 120.0, 200.0])).is_none());
     }
 
     fn default_arm() -> HandArm {
