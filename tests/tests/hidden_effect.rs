@@ -533,6 +533,34 @@ fn lateral_reaches_are_aligned_along_x() {
     check_design("grip-compliance", 1001, &design, 0.75);
 }
 
+/// Pulses in the four cardinal directions (six each; the same 24 pulses as the shared
+/// layout's eight directions) make two pairs of opposite directions, too few to hold
+/// one out at a time, so the hand balance splits each pair's repetitions into two groups
+/// of three and fits the odd parts of the groups' means (`hand_signals::odd_groups`).
+/// Fitted on the raw responses (before, with their even terms), seed 1003's 0.725 kg
+/// handle came out at 0.568 kg with a gain of 0.26; on the single odd parts at 0.632
+/// kg, 0.37: the arm's motor noise moves the handle, so it is in the regressors as well
+/// as the target, and only averaging takes it down. On the groups: 0.731 kg, 0.74. Over
+/// seeds 1000–1009, 9 of 10 within 20 % (gains 0.61–0.83; README, "Pulses in four
+/// directions"). A gain of 0.6 is asked.
+#[test]
+fn cardinal_pulses_are_fitted_on_groups_of_repetitions() {
+    let design = Design {
+        cardinal: true,
+        ..Design::SHARED
+    };
+    let (_, d) = run_design("none", 2000, &design);
+    assert!(d.causes.is_empty(), "named {:?}", d.causes);
+    assert!(
+        d.hand_unexplained.is_none(),
+        "reported {:?}",
+        d.hand_unexplained
+    );
+    assert_eq!(d.hand_repetition_groups, Some(2));
+    let (_, d) = check_design("handle-mass", 1003, &design, 0.6);
+    assert_eq!((d.hand_units, d.hand_test_units), (4, Some(12)));
+}
+
 /// A subject whose arm is heavier than the tables the diagnosis takes it from (every
 /// segment's mass and moment of inertia 15 % more; a manifest cannot say so) is not a
 /// cause. On the shared layout's long pulses it reads as a heavier handle (0.18 kg on

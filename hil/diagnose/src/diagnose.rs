@@ -397,15 +397,15 @@ pub struct Diagnosis {
     pub hand_trials_used: usize,
     /// Units the hand balance is fitted and its gains measured on: pairs of opposite
     /// pulse directions (the odd part of their mean responses); with fewer than four
-    /// such pairs, single opposite pulses (the odd part of each pair of them, and then
-    /// [`Self::hand_single_odd_parts`]); else pulse directions (repetitions averaged) or
-    /// single trials.
+    /// such pairs, groups of each pair's repetitions
+    /// ([`Self::hand_repetition_groups`]); else pulse directions (repetitions averaged)
+    /// or single trials.
     pub hand_units: usize,
-    /// Whether the hand balance's units are the odd parts of single opposite pulses
-    /// (the session has fewer than four pairs of opposite directions). Absent when
-    /// false.
-    #[serde(skip_serializing_if = "std::ops::Not::not")]
-    pub hand_single_odd_parts: bool,
+    /// With fewer than four pairs of opposite pulse directions, the groups each pair's
+    /// repetitions are split into, each averaged to one unit (the `i`-th repetition in
+    /// group `i mod n`). Absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hand_repetition_groups: Option<usize>,
     /// Independent units the hand balance's significance is tested on (one per
     /// repetition of a pair of opposite directions), when the fitted units average
     /// repetitions.
@@ -1599,7 +1599,7 @@ fn diagnose_units(
         hand_trials_used: 0,
         hand_units: 0,
         hand_test_units: None,
-        hand_single_odd_parts: false,
+        hand_repetition_groups: None,
         hand_baseline_nrmse: None,
         hand_noise_floor_nrmse: None,
         hand_baseline: BTreeMap::new(),
@@ -2268,7 +2268,7 @@ fn rank_hand(
                 .into_iter()
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
-            d.hand_single_odd_parts = h.odd_singles;
+            d.hand_repetition_groups = h.repetition_groups;
             let w = &h.whitening;
             d.hand_weighting_source = Some(w.source.as_str().to_string());
             d.hand_weighting = [
@@ -3206,16 +3206,17 @@ fn evidence(
              between the axes (from the {}); held-out NRMSE {:.4} of the whitened force",
             d.hand_trials_used,
             h.responses.len(),
-            match &h.replicates {
-                Some(r) => format!(
+            match (&h.replicates, h.repetition_groups) {
+                (Some(r), None) => format!(
                     "odd parts of the mean responses to opposite pulses, tested on {} repetitions",
                     r.units()
                 ),
-                None if h.odd_singles => {
-                    "odd parts of single opposite pulses (too few pairs of directions to average)"
-                        .to_string()
-                }
-                None => "averaged responses".to_string(),
+                (Some(r), Some(n)) => format!(
+                    "odd parts of the mean responses to opposite pulses, each pair's repetitions in {n} groups \
+                     (too few pairs of directions to hold one out), tested on {} repetitions",
+                    r.units()
+                ),
+                (None, _) => "averaged responses".to_string(),
             },
             super::hand_signals::HAND_WINDOW_S,
             p("d11_n_s_per_m"),

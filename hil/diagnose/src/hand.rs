@@ -67,10 +67,12 @@
 //! the shared protocol, [`ReplicateTest`]), leaving out one at a time, because four
 //! folds leave the t-test 3 degrees of freedom (critical t 5.14 for 7 candidates at
 //! α 0.05) where twelve leave it 11 (2.91). With fewer than four pairs (a lab's four
-//! cardinal directions make two) the fits run on the odd parts of single opposite
-//! pulses ([`odd_singles`]), in folds of them, at least eight; fitted on the responses
-//! themselves instead, the even terms pulled a 25 ms reflex to 13 ms and a 0.97 kg
-//! handle to 0.80 kg (`hil/docs/notes/2026-12-07-encoder-jumps-and-lateral-reaches.md`).
+//! cardinal directions make two) each pair's repetitions are split into groups, at
+//! least four units in all, and the fits run on the odd parts of the groups' means
+//! ([`odd_groups`]), tested on the repetitions as above: fitted on the single responses
+//! instead, the even terms and the arm's motor noise, which is in the regressors too
+//! (it moves the handle through the rig's admittance), pulled a 25 ms reflex to 13 ms
+//! and a 0.97 kg handle to 0.80 kg (`hil/docs/notes/2026-12-07-four-directions.md`).
 //! Without opposite pairs the responses are averaged by direction
 //! ([`average_by_angle`]) and the folds run over directions.
 //!
@@ -115,7 +117,7 @@ use super::error::DiscrepancyError;
 use super::gram::Gram;
 use super::hand_signals::{
     HandArm, HandData, HandResponse, MUSCLE_PAIRS, OddUnits, average_by_angle, hand_responses,
-    lagged, odd_parts, odd_singles,
+    lagged, odd_groups, odd_parts,
 };
 use rigtwin_session::{Axes, Session};
 
@@ -598,10 +600,11 @@ impl Whitening {
     }
 }
 
-/// The repetitions of the direction of the averaged unit `a` (the same angle, the same
-/// rows), when `a` is their mean: at least two of them, and together the same trials as
-/// `a`. `None` otherwise: a direction whose two sides of an opposite pair have different
-/// counts averages a repetition that no pair holds, and one repetition has no spread.
+/// The repetitions of the averaged unit `a` (the same angle, the same rows, trials
+/// among `a`'s: a pair's repetitions, or a group's of them), when `a` is their mean: at
+/// least two of them, and together the same trials as `a`. `None` otherwise: a
+/// direction whose two sides of an opposite pair have different counts averages a
+/// repetition that no pair holds, and one repetition has no spread.
 fn matched_repetitions<'a>(
     a: &HandResponse,
     repetitions: &'a [HandResponse],
@@ -609,6 +612,7 @@ fn matched_repetitions<'a>(
     let reps: Vec<&HandResponse> = repetitions
         .iter()
         .filter(|r| (r.angle_deg - a.angle_deg).abs() < 0.5 && r.rows == a.rows)
+        .filter(|r| r.trials.iter().all(|t| a.trials.contains(t)))
         .collect();
     let mut trials: Vec<u32> = reps.iter().flat_map(|r| r.trials.clone()).collect();
     let mut of_unit = a.trials.clone();
@@ -1279,16 +1283,17 @@ impl ReplicateTest {
 #[derive(Debug)]
 pub struct HandJudgement {
     /// The units fitted: the odd parts of the mean responses to opposite pulses
-    /// (`odd_parts`); with fewer pairs, those of single opposite pulses
-    /// (`odd_singles`, and then [`Self::odd_singles`]); without opposite pairs, the
-    /// responses averaged by direction (`average_by_angle`).
+    /// (`odd_parts`); with fewer pairs, of the means of groups of their repetitions
+    /// (`odd_groups`, and then [`Self::repetition_groups`]); without opposite pairs,
+    /// the responses averaged by direction (`average_by_angle`).
     pub responses: Vec<HandResponse>,
     /// The test on independent units, when the units above average repetitions
-    /// (`OddUnits::Averaged`); `None` when the units are already independent, and
+    /// (`OddUnits::Averaged` or `Groups`); `None` when the units are already independent, and
     /// then the folds above carry the test.
     pub replicates: Option<ReplicateTest>,
-    /// Whether [`Self::responses`] are the odd parts of single opposite pulses.
-    pub odd_singles: bool,
+    /// With fewer than four pairs of opposite directions, the groups each pair's
+    /// repetitions are split into (`odd_groups`); `None` otherwise.
+    pub repetition_groups: Option<usize>,
     /// Folds over [`Self::responses`].
     pub folds: Folds,
     /// Feedback delay chosen for the baseline, s.
@@ -1383,21 +1388,21 @@ pub fn judge_hand(
         ));
     }
     let arm = HandArm::from_session(session)?;
-    let (responses, replicates, singles) = match hand_responses(session, &arm)? {
+    let (responses, replicates, groups) = match hand_responses(session, &arm)? {
         HandData::Responses(r) => match (
             odd_parts(&r, OddUnits::Averaged),
             odd_parts(&r, OddUnits::Replicates),
         ) {
-            (Some(avg), Some(rep)) => (avg, Some(rep), false),
-            _ => match odd_singles(&r) {
-                Some(singles) => (singles, None, true),
-                None => (average_by_angle(r), None, false),
+            (Some(avg), Some(rep)) => (avg, Some(rep), None),
+            _ => match odd_groups(&r) {
+                Some((groups, rep, n)) => (groups, Some(rep), Some(n)),
+                None => (average_by_angle(r), None, None),
             },
         },
         HandData::Missing(why) => return Ok(Err(why)),
     };
     // The averaged units are as many as the pairs of directions (4 on the shared
-    // protocol): leave-one-out over them; `folds` is for units that are trials or
+    // protocol), or their groups: leave-one-out over them; `folds` is for units that are trials or
     // directions.
     let k = if replicates.is_some() {
         responses.len()
@@ -1493,7 +1498,7 @@ pub fn judge_hand(
     Ok(Ok(HandJudgement {
         responses,
         replicates,
-        odd_singles: singles,
+        repetition_groups: groups,
         folds,
         fb_delay_s,
         whitening,

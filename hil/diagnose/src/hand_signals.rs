@@ -379,6 +379,9 @@ pub enum OddUnits {
     /// `θ + 180°` (unmatched repetitions left out): independent units, what its
     /// significance is tested on.
     Replicates,
+    /// `n` units per pair: the matched repetitions as in `Replicates`, the `i`-th in
+    /// group `i mod n`, each group's mean ([`odd_groups`]).
+    Groups(usize),
 }
 
 /// The odd part of the response to each pair of opposite pulse directions: per pair,
@@ -403,20 +406,45 @@ pub fn odd_parts(responses: &[HandResponse], units: OddUnits) -> Option<Vec<Hand
     odd_parts_of(responses, units, MIN_OPPOSITE_PAIRS)
 }
 
-/// Fewest single odd parts ([`odd_singles`]) a session with fewer than
-/// [`MIN_OPPOSITE_PAIRS`] pairs of directions is fitted on: the folds' default count,
-/// so that every fold holds out at least one.
-pub const MIN_ODD_SINGLES: usize = 8;
-
-/// The odd parts of single opposite pulses (`OddUnits::Replicates`) of a session with
-/// at least one but fewer than [`MIN_OPPOSITE_PAIRS`] pairs of directions (a lab's
-/// four cardinal directions make two), when they are at least [`MIN_ODD_SINGLES`]:
-/// too few pairs to fit on their means in folds of pairs, enough repetitions to fit
-/// on the single pairs in folds of them, which keeps what the odd part removes (the
-/// terms even in the pulse, the reference's noise). `None` otherwise.
+/// The odd parts of a session with at least one but fewer than [`MIN_OPPOSITE_PAIRS`]
+/// pairs of opposite directions (a lab's four cardinal directions make two): too few
+/// pairs to hold one out at a time, so each pair's matched repetitions (the `i`-th at
+/// `θ` with the `i`-th at `θ + 180°`) are split into `n = ⌈MIN_OPPOSITE_PAIRS / pairs⌉`
+/// groups, the `i`-th into group `i mod n` (so a drift over the session falls on every
+/// group alike), and each group's mean responses give one odd part
+/// ([`OddUnits::Groups`]). Averaging matters beyond the folds: the arm's motor noise
+/// is in the hand force and moves the handle through the rig's admittance, so the
+/// regressors carry the noise the target carries, and a fit on single responses is
+/// biased (a handle's mass came out 10–30 % low and a reflex's delay at the search's
+/// lower edge on single odd parts). The groups average as many repetitions as the
+/// shared protocol's pairs do (three of six on four directions).
+///
+/// Returns the groups, the single odd parts (`OddUnits::Replicates`, what the
+/// significance is tested on) and `n`; `None` with no pair, with
+/// [`MIN_OPPOSITE_PAIRS`] pairs or more ([`odd_parts`] then), or when fewer than
+/// [`MIN_OPPOSITE_PAIRS`] groups have a repetition.
 #[must_use]
-pub fn odd_singles(responses: &[HandResponse]) -> Option<Vec<HandResponse>> {
-    odd_parts_of(responses, OddUnits::Replicates, 1).filter(|u| u.len() >= MIN_ODD_SINGLES)
+pub fn odd_groups(
+    responses: &[HandResponse],
+) -> Option<(Vec<HandResponse>, Vec<HandResponse>, usize)> {
+    let singles = odd_parts_of(responses, OddUnits::Replicates, 1)?;
+    let pairs = opposite_keys(responses).len();
+    if pairs >= MIN_OPPOSITE_PAIRS {
+        return None;
+    }
+    let n = MIN_OPPOSITE_PAIRS.div_ceil(pairs);
+    let groups = odd_parts_of(responses, OddUnits::Groups(n), 1)?;
+    (groups.len() >= MIN_OPPOSITE_PAIRS).then_some((groups, singles, n))
+}
+
+/// The directions below 180° (whole degrees) that have an opposite in `responses`.
+fn opposite_keys(responses: &[HandResponse]) -> Vec<i64> {
+    let key = direction_key;
+    let mut keys: Vec<i64> = responses.iter().map(key).filter(|k| *k < 180).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.retain(|k| responses.iter().any(|r| key(r) == k + 180));
+    keys
 }
 
 /// [`odd_parts`] with at least `min_pairs` pairs of directions.
@@ -429,18 +457,11 @@ fn odd_parts_of(
     if !same_shape(responses) {
         return None;
     }
-    let mut keys: Vec<i64> = responses.iter().map(key).filter(|k| *k < 180).collect();
-    keys.sort_unstable();
-    keys.dedup();
+    let keys = opposite_keys(responses);
     let mut out = Vec::new();
-    let mut pairs = 0;
-    for k in keys {
+    for &k in &keys {
         let a: Vec<&HandResponse> = responses.iter().filter(|r| key(r) == k).collect();
         let b: Vec<&HandResponse> = responses.iter().filter(|r| key(r) == k + 180).collect();
-        if b.is_empty() {
-            continue;
-        }
-        pairs += 1;
         match units {
             OddUnits::Averaged => out.push(odd_unit(k as f64, &a, &b)),
             OddUnits::Replicates => out.extend(
@@ -448,9 +469,23 @@ fn odd_parts_of(
                     .zip(&b)
                     .map(|(ra, rb)| odd_unit(k as f64, &[ra], &[rb])),
             ),
+            OddUnits::Groups(n) => {
+                for g in 0..n {
+                    let (ga, gb): (Vec<&HandResponse>, Vec<&HandResponse>) = a
+                        .iter()
+                        .zip(&b)
+                        .skip(g)
+                        .step_by(n)
+                        .map(|(ra, rb)| (*ra, *rb))
+                        .unzip();
+                    if !ga.is_empty() {
+                        out.push(odd_unit(k as f64, &ga, &gb));
+                    }
+                }
+            }
         }
     }
-    (pairs >= min_pairs).then_some(out)
+    (keys.len() >= min_pairs).then_some(out)
 }
 
 /// Half the difference of the mean responses `a` (at `θ`) and `b` (at `θ + 180°`), both
@@ -1084,37 +1119,63 @@ mod tests {
     }
 
     /// Four cardinal directions (two opposite pairs, too few for `odd_parts`), `reps`
-    /// repetitions each: the single odd parts are the pairs' repetitions, each the odd
-    /// value exactly, when they are at least `MIN_ODD_SINGLES`; fewer give `None`, as
-    /// do directions without an opposite.
+    /// repetitions each, the `i`-th at `θ` `even + odd + i` and at `θ + 180°`
+    /// `even − odd − i`: two groups per pair, the `i`-th repetition in group `i mod 2`,
+    /// so each group's odd part is `odd` plus the mean of its `i`, and its arm
+    /// matrices `even`; the singles are every matched pair. One or too few repetitions
+    /// to make four groups, no opposite pair, or four pairs give `None`.
     #[test]
-    fn few_opposite_pairs_give_the_odd_parts_of_single_pulses() {
+    fn few_opposite_pairs_are_split_into_groups_of_repetitions() {
         let (odd, even) = (1.5, 4.0);
-        let cardinal = |reps: u32, angles: &[f64]| -> Vec<HandResponse> {
+        let session = |reps: u32, angles: &[f64]| -> Vec<HandResponse> {
             let mut rs = Vec::new();
             for (k, angle) in angles.iter().enumerate() {
                 let sign = if *angle < 180.0 { 1.0 } else { -1.0 };
                 for i in 0..reps {
-                    rs.push(response(100 * k as u32 + i, *angle, even + sign * odd));
+                    let value = even + sign * (odd + f64::from(i));
+                    rs.push(response(100 * k as u32 + i, *angle, value));
                 }
             }
             rs
         };
-        let rs = cardinal(4, &[0.0, 90.0, 180.0, 270.0]);
+        let cardinal = [0.0, 90.0, 180.0, 270.0];
+        let rs = session(6, &cardinal);
         assert!(odd_parts(&rs, OddUnits::Averaged).is_none());
-        let Some(units) = odd_singles(&rs) else {
-            panic!("two pairs of four repetitions make {MIN_ODD_SINGLES} single odd parts");
+        let Some((groups, singles, n)) = odd_groups(&rs) else {
+            panic!("two pairs of six repetitions make four groups");
         };
-        assert_eq!(units.len(), 8);
-        for u in &units {
-            assert_eq!(u.trials.len(), 2);
+        assert_eq!((groups.len(), singles.len(), n), (4, 12, 2));
+        for (u, (angle, first)) in groups
+            .iter()
+            .zip([(0.0, 0), (0.0, 1), (90.0, 0), (90.0, 1)])
+        {
+            assert_eq!(u.angle_deg, angle);
+            let mine: Vec<u32> = [first, first + 2, first + 4].to_vec();
+            let base = if angle == 0.0 { 0 } else { 100 };
+            let mut expected: Vec<u32> = mine
+                .iter()
+                .flat_map(|i| [base + i, base + 200 + i])
+                .collect();
+            let mut trials = u.trials.clone();
+            expected.sort_unstable();
+            trials.sort_unstable();
+            assert_eq!(trials, expected);
+            let value = odd + f64::from(first + 2);
             for ch in [&u.dx, &u.dv, &u.da, &u.df, &u.dfd] {
-                assert!(ch.iter().flatten().all(|v| (v - odd).abs() < 1e-12));
+                assert!(ch.iter().flatten().all(|v| (v - value).abs() < 1e-12));
             }
             assert!(u.m_arm.iter().all(|m| (m[(0, 0)] - even).abs() < 1e-12));
         }
-        assert!(odd_singles(&cardinal(3, &[0.0, 90.0, 180.0, 270.0])).is_none());
-        assert!(odd_singles(&cardinal(6, &[0.0, 90.0, 120.0, 200.0])).is_none());
+        // One pair of four repetitions: four groups of one.
+        let Some((one, _, n)) = odd_groups(&session(4, &[30.0, 210.0])) else {
+            panic!("one pair of four repetitions makes four groups");
+        };
+        assert_eq!((one.len(), n), (4, 4));
+        assert!(odd_groups(&session(3, &[30.0, 210.0])).is_none());
+        assert!(odd_groups(&session(1, &cardinal)).is_none());
+        assert!(odd_groups(&session(6, &[0.0, 90.0, 120.0, 200.0])).is_none());
+        let eight = [30.0, 60.0, 120.0, 150.0, 210.0, 240.0, 300.0, 330.0];
+        assert!(odd_groups(&session(3, &eight)).is_none());
     }
 
     fn default_arm() -> HandArm {

@@ -203,13 +203,13 @@ pub fn table(d: &Diagnosis) -> String {
             "hand balance  {} perturbed trials as {} responses{}, arm inertia from segment lengths and body mass{}, feedback delay {:.0} ms, rows whitened ({:.0} ms noise time, W {} from the {}), held-out NRMSE {:.4}",
             d.hand_trials_used,
             d.hand_units,
-            match d.hand_test_units {
-                Some(n) => format!(" (odd parts of opposite pulses; t-test on {n} repetitions)"),
-                None if d.hand_single_odd_parts => {
-                    " (odd parts of single opposite pulses: too few pairs of directions to average)"
-                        .to_string()
-                }
-                None => String::new(),
+            match (d.hand_test_units, d.hand_repetition_groups) {
+                (Some(n), None) =>
+                    format!(" (odd parts of opposite pulses; t-test on {n} repetitions)"),
+                (Some(n), Some(g)) => format!(
+                    " (odd parts of opposite pulses, each pair's repetitions in {g} groups; t-test on {n} repetitions)"
+                ),
+                (None, _) => String::new(),
             },
             d.hand_arm_inertia_scale
                 .map(|f| format!(" (×{f:.2} of it fits best given the named effects)"))
@@ -992,8 +992,9 @@ pub fn write_report(a: &Analysis, dir: &Path) -> Result<Vec<PathBuf>, Discrepanc
          after the onset. With opposite pulse directions in the session it is fitted on the odd part of each \
          pair's mean responses (half the difference of the responses to θ and θ + 180°, which drops the terms \
          even in the pulse and the reference's noise), one pair held out at a time, and tested on the single \
-         repetitions of the pairs, one held out at a time; with fewer than four pairs of directions, on the odd \
-         parts of single opposite pulses, in folds of them; otherwise on responses averaged by direction, in \
+         repetitions of the pairs, one held out at a time (with fewer than four pairs of directions, each pair's \
+         repetitions are split into groups, at least four units in all, and the groups' means take the pairs' \
+         place); otherwise on responses averaged by direction, in \
          folds of directions. Every row of the hand balance is weighted (generalised least squares): filtered by \
          `1 − φ z⁻¹` in time, `φ = exp(−Δt/τ)` with τ the arm's motor-noise correlation time, and multiplied \
          between the axes by `W`, `WᵀW ∝ Σ⁻¹` with `Σ` the covariance between the axes of the noise so filtered: \
