@@ -10,6 +10,8 @@
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/f --movement 1.0
 //! cargo run --release -p rigtwin-tests --example generate -- grip-compliance 3 /tmp/g --grip 1000,10
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/l --lateral
+//! cargo run --release -p rigtwin-tests --example generate -- handle-mass 7 /tmp/c --cardinal
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/p --angles 0,180
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -26,9 +28,11 @@
 //! duration (default the protocol's 3 s); `--grip N_PER_M,N_S_PER_M` hides a grip of that
 //! stiffness and damping instead of the drawn one (effect `grip-compliance` only);
 //! `--lateral` lays the reaches along `x` instead of `y` (`Design::lateral`);
-//! `--cardinal` fires the pulses in four directions instead of eight
-//! (`Design::cardinal`). Prints
-//! the session folder and what it hides.
+//! `--angles A,B,…` fires the pulses in those directions (degrees from `+x` toward `+y`)
+//! instead of the protocol's eight, as many per direction as make the shared layout's
+//! 24 pulses unless `--repetitions` says (`Design::with_angles`); `--cardinal` is
+//! `--angles 0,90,180,270` (`Design::cardinal`). Prints the session folder and what it
+//! hides.
 
 use rigtwin_tests::generator::{
     Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_grip, parse_pulse,
@@ -37,7 +41,7 @@ use rigtwin_tests::generator::{
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--cardinal]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--angles DEGREES,…] [--cardinal]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -47,7 +51,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut grip = None;
     let mut ideal = false;
     let mut lateral = false;
-    let mut cardinal = false;
+    let mut angles: Option<Vec<f64>> = None;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
     let mut args = std::env::args().skip(1);
@@ -56,7 +60,25 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             "--no-motor-noise" => motor_noise = false,
             "--ideal" => ideal = true,
             "--lateral" => lateral = true,
-            "--cardinal" => cardinal = true,
+            "--cardinal" => angles = Some(vec![0.0, 90.0, 180.0, 270.0]),
+            "--angles" => {
+                let v = args
+                    .next()
+                    .ok_or_else(|| format!("--angles needs DEGREES,…; {}", usage()))?;
+                let list = v
+                    .split(',')
+                    .map(|a| {
+                        a.trim()
+                            .parse::<f64>()
+                            .ok()
+                            .filter(|a| a.is_finite())
+                            .ok_or_else(|| {
+                                format!("--angles {v:?}: {a:?} is not a number of degrees")
+                            })
+                    })
+                    .collect::<Result<Vec<f64>, String>>()?;
+                angles = Some(list);
+            }
             "--repetitions" => {
                 let n = args
                     .next()
@@ -118,7 +140,12 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         return Err(format!("unexpected argument {bad:?}; {}", usage()).into());
     }
     let seed: u64 = seed.parse().map_err(|e| format!("seed {seed:?}: {e}"))?;
-    let mut design = repetitions.map_or(Design::SHARED, Design::with_pulses);
+    let mut design = match (&angles, repetitions) {
+        // The shared layout's 24 pulses over the directions given, unless told.
+        (Some(a), r) => Design::with_angles(a, r.unwrap_or_else(|| 24u32.div_ceil(a.len() as u32))),
+        (None, Some(r)) => Design::with_pulses(r),
+        (None, None) => Design::SHARED,
+    };
     if let Some(t) = rest.first() {
         design.trials = t.parse().map_err(|e| format!("trials {t:?}: {e}"))?;
     }
@@ -130,7 +157,6 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
     design.lateral = lateral;
-    design.cardinal = cardinal;
     let out = std::path::Path::new(out.as_str());
     let g = match grip {
         Some((k, b)) if effect == "grip-compliance" => {

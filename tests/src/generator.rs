@@ -353,8 +353,9 @@ pub struct Generated {
 pub struct Design {
     /// Reaches recorded.
     pub trials: usize,
-    /// Pulses per angle (the protocol's 8 angles): 3 on the shared sessions. A lab
-    /// measuring a reflex against the arm's motor noise gives it more.
+    /// Pulses per angle (the protocol's 8 angles, or [`Self::angles_deg`]): 3 on the
+    /// shared sessions. A lab measuring a reflex against the arm's motor noise gives it
+    /// more.
     pub repetitions: u32,
     /// The arm's signal-dependent motor noise; off, only the sensor noise and encoder
     /// quantum remain: the same subject and effect, to see what a balance's model
@@ -381,10 +382,11 @@ pub struct Design {
     /// `[0.125, 0]` m, the pulse fired where the measured `x` crosses −0.025 m, as a lab
     /// that studies lateral reaches lays them out.
     pub lateral: bool,
-    /// Pulses in the four cardinal directions (0, 90, 180, 270°) instead of the
-    /// protocol's eight, twice as many per direction (the same number of pulses): the
-    /// layout of many labs, two pairs of opposite directions.
-    pub cardinal: bool,
+    /// The pulse directions, degrees from `+x` toward `+y`, `repetitions` pulses each;
+    /// `None` keeps the protocol's eight (30, 60, 120, … 330°, none along an axis).
+    /// Many labs pulse in the four cardinal directions ([`Design::cardinal`]: two pairs
+    /// of opposite directions) or only across the reach (one pair).
+    pub angles_deg: Option<Vec<f64>>,
 }
 
 impl Design {
@@ -400,7 +402,7 @@ impl Design {
         arm_inertia_scale: 1.0,
         movement_s: None,
         lateral: false,
-        cardinal: false,
+        angles_deg: None,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -426,8 +428,28 @@ impl Design {
             arm_inertia_scale: 1.0,
             movement_s: None,
             lateral: false,
-            cardinal: false,
+            angles_deg: None,
         }
+    }
+
+    /// `repetitions` pulses in each of `angles_deg` (degrees from `+x` toward `+y`), in a
+    /// session of the shared proportion (a quarter of the reaches unperturbed).
+    #[must_use]
+    pub fn with_angles(angles_deg: &[f64], repetitions: u32) -> Design {
+        let perturbed = angles_deg.len() * repetitions as usize;
+        Design {
+            trials: perturbed + perturbed / 3,
+            repetitions,
+            angles_deg: Some(angles_deg.to_vec()),
+            ..Design::SHARED
+        }
+    }
+
+    /// The shared layout's 24 pulses in the four cardinal directions (0, 90, 180, 270°,
+    /// six each, in 32 reaches): the layout of many labs.
+    #[must_use]
+    pub fn cardinal() -> Design {
+        Design::with_angles(&[0.0, 90.0, 180.0, 270.0], 6)
     }
 
     /// A session laid out to measure a short-latency reflex, as reflex studies do: 72
@@ -565,9 +587,8 @@ pub fn generate_hidden(
     if let Some(s) = design.movement_s {
         reach.movement_s = s;
     }
-    if design.cardinal {
-        reach.angles_deg = vec![0.0, 90.0, 180.0, 270.0];
-        reach.repetitions *= 2;
+    if let Some(angles) = &design.angles_deg {
+        reach.angles_deg.clone_from(angles);
     }
     if design.lateral {
         reach.start_m = [-0.125, 0.0];
