@@ -69,10 +69,11 @@
 //! α 0.05) where twelve leave it 11 (2.91). With fewer than four pairs (a lab's four
 //! cardinal directions make two) each pair's repetitions are split into groups, at
 //! least four units in all, and the fits run on the odd parts of the groups' means
-//! ([`odd_groups`]), tested on the repetitions as above: fitted on the single responses
-//! instead, the even terms and the arm's motor noise, which is in the regressors too
-//! (it moves the handle through the rig's admittance), pulled a 25 ms reflex to 13 ms
-//! and a 0.97 kg handle to 0.80 kg (`hil/docs/notes/2026-12-07-four-directions.md`).
+//! ([`odd_groups`]), tested on the repetitions as above. Fitted on the responses
+//! averaged by direction instead, the even terms pulled a 25 ms reflex to 13 ms and a
+//! 0.97 kg handle to 0.80 kg; on single odd parts, the arm's motor noise, which is in
+//! the regressors too (it moves the handle through the rig's admittance), biased them
+//! less but still (`hil/docs/notes/2026-12-07-four-directions.md`).
 //! Without opposite pairs the responses are averaged by direction
 //! ([`average_by_angle`]) and the folds run over directions.
 //!

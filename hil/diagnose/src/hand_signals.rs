@@ -415,8 +415,8 @@ pub fn odd_parts(responses: &[HandResponse], units: OddUnits) -> Option<Vec<Hand
 /// ([`OddUnits::Groups`]). Averaging matters beyond the folds: the arm's motor noise
 /// is in the hand force and moves the handle through the rig's admittance, so the
 /// regressors carry the noise the target carries, and a fit on single responses is
-/// biased (a handle's mass came out 10–30 % low and a reflex's delay at the search's
-/// lower edge on single odd parts). The groups average as many repetitions as the
+/// biased (on single odd parts a handle's mass came out up to 25 % low and a reflex's
+/// delay at 12–18 ms for 16–35 ms). The groups average as many repetitions as the
 /// shared protocol's pairs do (three of six on four directions).
 ///
 /// Returns the groups, the single odd parts (`OddUnits::Replicates`, what the
