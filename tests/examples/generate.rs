@@ -35,7 +35,8 @@
 //! hides.
 
 use rigtwin_tests::generator::{
-    Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_grip, parse_pulse,
+    CARDINAL_DEG, Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_grip,
+    parse_pulse,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
@@ -60,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             "--no-motor-noise" => motor_noise = false,
             "--ideal" => ideal = true,
             "--lateral" => lateral = true,
-            "--cardinal" => angles = Some(vec![0.0, 90.0, 180.0, 270.0]),
+            "--cardinal" => angles = Some(CARDINAL_DEG.to_vec()),
             "--angles" => {
                 let v = args
                     .next()

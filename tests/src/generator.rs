@@ -347,6 +347,9 @@ pub struct Generated {
     pub hidden: Hidden,
 }
 
+/// The four cardinal pulse directions, degrees from `+x` toward `+y` ([`Design::cardinal`]).
+pub const CARDINAL_DEG: [f64; 4] = [0.0, 90.0, 180.0, 270.0];
+
 /// How a generated session is laid out: its length, how many force pulses it carries
 /// and of what shape, and whether the arm has its motor noise.
 #[derive(Debug, Clone, PartialEq)]
@@ -449,7 +452,7 @@ impl Design {
     /// six each, in 32 reaches): the layout of many labs.
     #[must_use]
     pub fn cardinal() -> Design {
-        Design::with_angles(&[0.0, 90.0, 180.0, 270.0], 6)
+        Design::with_angles(&CARDINAL_DEG, 6)
     }
 
     /// A session laid out to measure a short-latency reflex, as reflex studies do: 72

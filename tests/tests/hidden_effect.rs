@@ -523,12 +523,7 @@ fn lateral_reaches_are_aligned_along_x() {
     };
     for seed in [2001, 2004] {
         let (_, d) = run_design("none", seed, &design);
-        assert!(d.causes.is_empty(), "seed {seed}: named {:?}", d.causes);
-        assert!(
-            d.hand_unexplained.is_none(),
-            "seed {seed}: reported {:?}",
-            d.hand_unexplained
-        );
+        assert_finds_nothing(&d, &format!("seed {seed}"));
     }
     check_design("grip-compliance", 1001, &design, 0.75);
 }
@@ -547,12 +542,7 @@ fn lateral_reaches_are_aligned_along_x() {
 fn cardinal_pulses_are_fitted_on_groups_of_repetitions() {
     let design = Design::cardinal();
     let (_, d) = run_design("none", 2000, &design);
-    assert!(d.causes.is_empty(), "named {:?}", d.causes);
-    assert!(
-        d.hand_unexplained.is_none(),
-        "reported {:?}",
-        d.hand_unexplained
-    );
+    assert_finds_nothing(&d, "seed 2000");
     assert_eq!(d.hand_repetition_groups, Some(2));
     let (_, d) = check_design("handle-mass", 1003, &design, 0.6);
     assert_eq!((d.hand_units, d.hand_test_units), (4, Some(12)));
@@ -574,12 +564,7 @@ fn an_arm_heavier_than_the_tables_is_not_a_heavier_handle() {
         ..Design::SHARED
     };
     let (_, d) = run_design("none", 2000, &design);
-    assert!(d.causes.is_empty(), "named {:?}", d.causes);
-    assert!(
-        d.hand_unexplained.is_none(),
-        "reported {:?}",
-        d.hand_unexplained
-    );
+    assert_finds_nothing(&d, "seed 2000");
     assert_told_from_the_arm(&d, "handle-mass", "seed 2000");
     let fitted = d.hand_arm_inertia_scale.unwrap();
     assert!((fitted - 1.15).abs() < 0.04, "arm inertia ×{fitted:.3}");
@@ -607,6 +592,17 @@ fn fast_reaches_hiding_nothing_name_no_heavier_handle() {
     let (_, d) = run_design("none", seed, &design);
     assert!(d.causes.is_empty(), "seed {seed}: named {:?}", d.causes);
     assert_told_from_the_arm(&d, "handle-mass", &format!("seed {seed}"));
+}
+
+/// Asserts that a session hiding nothing (`what` names it) has no cause named and no
+/// structure reported outside the catalog on the hand balance.
+fn assert_finds_nothing(d: &Diagnosis, what: &str) {
+    assert!(d.causes.is_empty(), "{what}: named {:?}", d.causes);
+    assert!(
+        d.hand_unexplained.is_none(),
+        "{what}: reported {:?}",
+        d.hand_unexplained
+    );
 }
 
 /// Asserts that candidate `name`'s row was rejected as not told from the subject's arm

@@ -458,6 +458,9 @@ fn odd_parts_of(
         return None;
     }
     let keys = opposite_keys(responses);
+    if keys.len() < min_pairs {
+        return None;
+    }
     let mut out = Vec::new();
     for &k in &keys {
         let a: Vec<&HandResponse> = responses.iter().filter(|r| key(r) == k).collect();
@@ -485,7 +488,7 @@ fn odd_parts_of(
             }
         }
     }
-    (keys.len() >= min_pairs).then_some(out)
+    Some(out)
 }
 
 /// Half the difference of the mean responses `a` (at `θ`) and `b` (at `θ + 180°`), both
