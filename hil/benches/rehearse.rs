@@ -21,7 +21,15 @@ fn bench(c: &mut Criterion) {
     let perturbed = plans
         .iter()
         .take(trials)
-        .filter(|p| matches!(p.task, TrialTask::Reach { angle_deg: Some(_) }))
+        .filter(|p| {
+            matches!(
+                p.task,
+                TrialTask::Reach {
+                    angle_deg: Some(_),
+                    ..
+                }
+            )
+        })
         .count();
     let ticks_per_trial = rehearse::trial::trial_ticks(&protocol);
     let ticks = ticks_per_trial * (trials + perturbed) as u64;

@@ -26,7 +26,15 @@ fn the_controllers_tick_across_the_wire_allocates_nothing() {
     let subject = protocol.subjects.draw(42, 1);
     let plan = schedule(&protocol, 42, 1)
         .into_iter()
-        .find(|p| matches!(p.task, TrialTask::Reach { angle_deg: Some(_) }))
+        .find(|p| {
+            matches!(
+                p.task,
+                TrialTask::Reach {
+                    angle_deg: Some(_),
+                    ..
+                }
+            )
+        })
         .unwrap();
     let id = u16::try_from(plan.index + 1).unwrap();
     let parts = trial::controller_parts(&protocol, &subject, 42, &plan, true).unwrap();

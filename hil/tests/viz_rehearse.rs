@@ -247,7 +247,15 @@ fn a_saved_rehearsal_holds_every_sample_and_the_reports_ellipses() {
         .collect();
     let perturbed: Vec<_> = plans
         .iter()
-        .filter(|p| matches!(p.task, TrialTask::Reach { angle_deg: Some(_) }))
+        .filter(|p| {
+            matches!(
+                p.task,
+                TrialTask::Reach {
+                    angle_deg: Some(_),
+                    ..
+                }
+            )
+        })
         .collect();
     assert!(perturbed.len() >= 3, "{}", perturbed.len());
     let [k_onset, d_onset] = Which::TruthAtOnset.matrix_paths();

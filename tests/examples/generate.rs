@@ -12,6 +12,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/l --lateral
 //! cargo run --release -p rigtwin-tests --example generate -- handle-mass 7 /tmp/c --cardinal
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/p --angles 0,180
+//! cargo run --release -p rigtwin-tests --example generate -- grip-compliance 7 /tmp/o --centre-out
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -31,18 +32,19 @@
 //! `--angles A,B,…` fires the pulses in those directions (degrees from `+x` toward `+y`)
 //! instead of the protocol's eight, as many per direction as make the shared layout's
 //! 24 pulses unless `--repetitions` says (`Design::with_angles`); `--cardinal` is
-//! `--angles 0,90,180,270` (`Design::cardinal`). Prints the session folder and what it
+//! `--angles 0,90,180,270` (`Design::cardinal`); `--centre-out` sends the reaches to
+//! three goals (`Design::centre_out`, `CENTRE_OUT_M`). Prints the session folder and what it
 //! hides.
 
 use rigtwin_tests::generator::{
-    CARDINAL_DEG, Design, EFFECTS, Hidden, generate_design, generate_hidden, parse_grip,
-    parse_pulse,
+    CARDINAL_DEG, CENTRE_OUT_M, Design, EFFECTS, Hidden, generate_design, generate_hidden,
+    parse_grip, parse_pulse,
 };
 
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--angles DEGREES,…] [--cardinal]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--angles DEGREES,…] [--cardinal] [--centre-out]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -52,6 +54,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut grip = None;
     let mut ideal = false;
     let mut lateral = false;
+    let mut centre_out = false;
     let mut angles: Option<Vec<f64>> = None;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
@@ -61,6 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             "--no-motor-noise" => motor_noise = false,
             "--ideal" => ideal = true,
             "--lateral" => lateral = true,
+            "--centre-out" => centre_out = true,
             "--cardinal" => angles = Some(CARDINAL_DEG.to_vec()),
             "--angles" => {
                 let v = args
@@ -158,6 +162,9 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
     design.lateral = lateral;
+    if centre_out {
+        design.targets_m = Some(CENTRE_OUT_M.to_vec());
+    }
     let out = std::path::Path::new(out.as_str());
     let g = match grip {
         Some((k, b)) if effect == "grip-compliance" => {

@@ -350,6 +350,11 @@ pub struct Generated {
 /// The four cardinal pulse directions, degrees from `+x` toward `+y` ([`Design::cardinal`]).
 pub const CARDINAL_DEG: [f64; 4] = [0.0, 90.0, 180.0, 270.0];
 
+/// The goals of [`Design::centre_out`], rig frame, m: 0.18 m from the protocol's start
+/// `[0, −0.125]` at 45°, 90° and 135° from `+x`, to 0.01 mm (a fan in front of the body,
+/// inside the rig's ±0.15 m along `x`).
+pub const CENTRE_OUT_M: [[f64; 2]; 3] = [[0.127_28, 0.002_28], [0.0, 0.055], [-0.127_28, 0.002_28]];
+
 /// How a generated session is laid out: its length, how many force pulses it carries
 /// and of what shape, and whether the arm has its motor noise.
 #[derive(Debug, Clone, PartialEq)]
@@ -390,6 +395,9 @@ pub struct Design {
     /// Many labs pulse in the four cardinal directions ([`Design::cardinal`]: two pairs
     /// of opposite directions) or only across the reach (one pair).
     pub angles_deg: Option<Vec<f64>>,
+    /// Centre-out goals (the protocol's `reach.targets_m`), rig frame, m; `None`: every
+    /// reach to the protocol's goal. [`Design::centre_out`] is a fan of three.
+    pub targets_m: Option<Vec<[f64; 2]>>,
 }
 
 impl Design {
@@ -406,6 +414,7 @@ impl Design {
         movement_s: None,
         lateral: false,
         angles_deg: None,
+        targets_m: None,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -432,6 +441,7 @@ impl Design {
             movement_s: None,
             lateral: false,
             angles_deg: None,
+            targets_m: None,
         }
     }
 
@@ -444,6 +454,18 @@ impl Design {
             trials: perturbed + perturbed / 3,
             repetitions,
             angles_deg: Some(angles_deg.to_vec()),
+            ..Design::SHARED
+        }
+    }
+
+    /// The shared layout's 24 pulses on centre-out reaches to the three goals of
+    /// [`CENTRE_OUT_M`] (45°, 90° and 135° from the start, 0.18 m away): each goal gets
+    /// one pulse in each of the protocol's eight directions, and a third of the
+    /// unperturbed reaches.
+    #[must_use]
+    pub fn centre_out() -> Design {
+        Design {
+            targets_m: Some(CENTRE_OUT_M.to_vec()),
             ..Design::SHARED
         }
     }
@@ -598,6 +620,9 @@ pub fn generate_hidden(
         reach.goal_m = [0.125, 0.0];
         reach.trigger_axis = rigtwin_device::config::Axis::X;
         reach.trigger_position_m = -0.025;
+    }
+    if let Some(t) = &design.targets_m {
+        reach.targets_m.clone_from(t);
     }
     let perturbed = reach.repetitions as usize * reach.angles_deg.len();
     reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);

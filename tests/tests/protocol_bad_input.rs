@@ -90,6 +90,21 @@ fn bad_values_name_every_key() {
     }
 }
 
+/// Centre-out goals must lie inside the rig and away from the start.
+#[test]
+fn centre_out_goals_are_checked() {
+    let text = reach().replace(
+        "trigger_position_m = -0.025",
+        "trigger_position_m = -0.025\ntargets_m = [[0.0, -0.12], [0.5, 0.0], [0.1, 0.0]]",
+    );
+    let e = parse(&text).unwrap_err();
+    for key in ["reach.targets_m[0]", "reach.targets_m[1][0]"] {
+        assert!(e.names(key), "{key} not named in: {e}");
+    }
+    assert!(!e.names("reach.targets_m[2]"), "{e}");
+    assert!(e.to_string().contains("20 mm"), "{e}");
+}
+
 #[test]
 fn durations_must_be_whole_ticks() {
     let e = parse(&set(&reach(), "still_before_s", "0.00001")).unwrap_err();

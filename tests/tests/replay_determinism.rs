@@ -49,7 +49,13 @@ fn the_controller_replayed_on_its_own_session_writes_the_recorded_commands() {
     let mut perturbed = 0;
     for (plan, table) in plans.iter().zip(&session.trials) {
         assert_eq!(table.t_s.len() as u64, n_ticks, "one row per tick");
-        if matches!(plan.task, TrialTask::Reach { angle_deg: Some(_) }) {
+        if matches!(
+            plan.task,
+            TrialTask::Reach {
+                angle_deg: Some(_),
+                ..
+            }
+        ) {
             perturbed += 1;
         }
         let mut replay = ReplayRig::at_control_rate(

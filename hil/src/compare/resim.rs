@@ -106,6 +106,15 @@ pub(crate) fn replay_trial(
     let mut p = protocol.clone();
     if let Some(r) = p.reach.as_mut() {
         if let (Some(s), Some(g)) = (entry.start_m, entry.goal_m) {
+            if g != r.goal_m {
+                // A reach to another goal (a centre-out session's): its pulse fires at
+                // the protocol's fraction of its own way, on the axis it travels along
+                // more, as the rehearsal fired it.
+                r.targets_m = vec![g];
+                if let Some(toward) = r.toward(0) {
+                    *r = toward;
+                }
+            }
             r.start_m = s;
             r.goal_m = g;
         }
@@ -118,6 +127,7 @@ pub(crate) fn replay_trial(
         index: u32::try_from(index).unwrap_or(u32::MAX),
         task: TrialTask::Reach {
             angle_deg: entry.perturbation.as_ref().map(|q| q.angle_deg),
+            target: None,
         },
     };
     let seed = p.seed;

@@ -189,6 +189,16 @@ pub struct ReachConfig {
     /// in the direction of the movement, m (−0.025: 0.1 m into the reach, 0.4 m from
     /// the shoulder).
     pub trigger_position_m: f64,
+    /// Centre-out reaches: the goals, rig frame, m, every reach starting at `start_m`
+    /// (empty, the default: every reach goes to `goal_m`). The unperturbed reaches go to
+    /// them in turn, and the `r`-th repetition of every pulse direction to goal
+    /// `r mod n`, so that with repetitions a multiple of `n` each goal sees every
+    /// direction equally often; the schedule's shuffle then places them. A reach's
+    /// pulse fires at the same fraction of its way as `trigger_position_m` is of the
+    /// way from `start_m` to `goal_m` on `trigger_axis`, on the crossing of the axis it
+    /// travels along more ([`ReachConfig::toward`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub targets_m: Vec<[f64; 2]>,
 }
 
 impl Default for ReachConfig {
@@ -204,6 +214,7 @@ impl Default for ReachConfig {
             repetitions: 3,
             trigger_axis: rigtwin_device::config::Axis::Y,
             trigger_position_m: -0.025,
+            targets_m: Vec::new(),
         }
     }
 }
@@ -219,6 +230,39 @@ impl ReachConfig {
     #[must_use]
     pub fn trial_s(&self) -> f64 {
         self.still_before_s + self.movement_s + self.still_after_s
+    }
+
+    /// The fraction of the way from `start_m` to `goal_m` at which the pulse fires,
+    /// along `trigger_axis` (0.4 on 000_*).
+    #[must_use]
+    pub fn trigger_fraction(&self) -> f64 {
+        let axis = self.trigger_axis.index();
+        (self.trigger_position_m - self.start_m[axis]) / (self.goal_m[axis] - self.start_m[axis])
+    }
+
+    /// The reach to centre-out goal `target` (an index into `targets_m`) as a reach of
+    /// its own: `goal_m` that goal, no `targets_m`, and the trigger on the axis the reach
+    /// travels along more, at [`Self::trigger_fraction`] of its way. `None` when
+    /// `targets_m` has no such goal.
+    #[must_use]
+    pub fn toward(&self, target: usize) -> Option<ReachConfig> {
+        use rigtwin_device::config::Axis;
+        let goal = *self.targets_m.get(target)?;
+        let fraction = self.trigger_fraction();
+        let way = [goal[0] - self.start_m[0], goal[1] - self.start_m[1]];
+        let axis = if way[0].abs() > way[1].abs() {
+            Axis::X
+        } else {
+            Axis::Y
+        };
+        let i = axis.index();
+        Some(ReachConfig {
+            goal_m: goal,
+            trigger_axis: axis,
+            trigger_position_m: self.start_m[i] + fraction * way[i],
+            targets_m: Vec::new(),
+            ..self.clone()
+        })
     }
 }
 
@@ -775,6 +819,22 @@ impl Protocol {
             ((r.goal_m[0] - r.start_m[0]).powi(2) + (r.goal_m[1] - r.start_m[1]).powi(2)).sqrt();
         if dist.is_finite() && dist < 1e-3 {
             c.fail("reach.goal_m", "must be at least 1 mm from reach.start_m");
+        }
+        for (i, g) in r.targets_m.iter().enumerate() {
+            let key = format!("reach.targets_m[{i}]");
+            for (a, v) in g.iter().enumerate() {
+                c.inside(&format!("{key}[{a}]"), *v, wall);
+            }
+            let way = ((g[0] - r.start_m[0]).powi(2) + (g[1] - r.start_m[1]).powi(2)).sqrt();
+            if way.is_finite() && way < 0.02 {
+                c.fail(
+                    &key,
+                    format!(
+                        "must be at least 20 mm from reach.start_m, got {:.1} mm",
+                        way * 1e3
+                    ),
+                );
+            }
         }
     }
 

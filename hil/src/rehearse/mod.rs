@@ -289,20 +289,28 @@ pub fn schedule(protocol: &Protocol, session_seed: u64, subject: u32) -> Vec<Tri
         ProtocolKind::ReachPerturb => {
             let r = protocol.reach();
             let mut rng = ChaCha8Rng::seed_from_u64(seed::schedule_seed(session_seed, subject));
-            let mut angles: Vec<Option<f64>> = vec![None; r.trials as usize];
+            // Centre-out: the r-th repetition of every direction to goal r mod n, the
+            // unperturbed reaches to the goals in turn.
+            let goals = r.targets_m.len();
+            let target = |i: usize| (goals > 0).then(|| i % goals);
+            let mut slots: Vec<(Option<f64>, Option<usize>)> =
+                vec![(None, None); r.trials as usize];
             let mut k = 0;
-            for _ in 0..r.repetitions {
+            for rep in 0..r.repetitions as usize {
                 for a in &r.angles_deg {
-                    if let Some(slot) = angles.get_mut(k) {
-                        *slot = Some(*a);
+                    if let Some(slot) = slots.get_mut(k) {
+                        *slot = (Some(*a), target(rep));
                     }
                     k += 1;
                 }
             }
-            angles.shuffle(&mut rng);
-            angles
+            for (j, slot) in slots.iter_mut().skip(k).enumerate() {
+                slot.1 = target(j);
+            }
+            slots.shuffle(&mut rng);
+            slots
                 .into_iter()
-                .map(|angle_deg| TrialTask::Reach { angle_deg })
+                .map(|(angle_deg, target)| TrialTask::Reach { angle_deg, target })
                 .collect()
         }
         ProtocolKind::HoldSinusoid => protocol
@@ -426,6 +434,8 @@ fn run_trial(
     plan: &TrialPlan,
     clock: Option<&mut WallClock>,
 ) -> Result<Done, RehearseError> {
+    // A centre-out reach runs as a reach to its own goal.
+    let recorded = &*trial::for_plan(recorded, plan);
     // The trial runs with its nuisances (if the protocol has any); its manifest entry
     // keeps the protocol's task, as a lab's rig logs its targets.
     let (protocol, subject, trigger_lag) =
@@ -465,7 +475,13 @@ fn run_trial(
         .map(|k| record::tick_time_s(k.saturating_sub(trigger_lag), div));
     let mut twin = None;
     let mut deviation = None;
-    if let (Some(t0), TrialTask::Reach { angle_deg: Some(_) }) = (pulse_onset_s, &plan.task) {
+    if let (
+        Some(t0),
+        TrialTask::Reach {
+            angle_deg: Some(_), ..
+        },
+    ) = (pulse_onset_s, &plan.task)
+    {
         let base = trial::simulate(protocol, subject, session_seed, plan, false)?;
         simulated_s += n_ticks as f64 / TICK_HZ as f64;
         let i0 = (t0 * rate).round().max(0.0) as usize;
@@ -539,7 +555,12 @@ pub(crate) fn trial_meta(protocol: &Protocol, plan: &TrialPlan, onset_s: Option<
         ),
     };
     let perturbation = match (&plan.task, onset_s) {
-        (TrialTask::Reach { angle_deg: Some(a) }, Some(t)) => Some(Perturbation {
+        (
+            TrialTask::Reach {
+                angle_deg: Some(a), ..
+            },
+            Some(t),
+        ) => Some(Perturbation {
             kind: PerturbationKind::ForcePulse,
             onset_s: t,
             duration_s: protocol.controller.force_pulse.duration_s,
@@ -849,3 +870,92 @@ fn realtime_clock(
 
 /// Format version written (for the report).
 pub const SESSION_FORMAT_VERSION: i64 = FORMAT_VERSION;
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::expect_used)]
+    use super::*;
+    use rigtwin_device::config::Axis;
+
+    /// A centre-out schedule gives every goal each pulse direction once per
+    /// `n` repetitions and the unperturbed reaches in turn; each goal's reach fires its
+    /// pulse at the protocol's fraction of the way (0.4) on the axis it travels along
+    /// more; without goals the schedule is the one-goal protocol's, slot for slot.
+    #[test]
+    fn centre_out_goals_share_the_pulses_and_the_trigger_fraction() {
+        let mut p = Protocol::builtin("reach-perturb").unwrap();
+        let one_goal = schedule(&p, 42, 1);
+        let goals = vec![[0.1, -0.125], [0.0, 0.075], [-0.06, -0.045]];
+        let mut r = p.reach();
+        r.targets_m.clone_from(&goals);
+        r.trials = 32;
+        p.reach = Some(r.clone());
+        let plans = schedule(&p, 42, 1);
+        assert_eq!(plans.len(), 32);
+        let mut seen = BTreeMap::new();
+        let mut unperturbed = [0; 3];
+        for plan in &plans {
+            let TrialTask::Reach { angle_deg, target } = plan.task else {
+                panic!("{plan:?}");
+            };
+            let t = target.unwrap();
+            match angle_deg {
+                Some(a) => *seen.entry((t, a.round() as i64)).or_insert(0) += 1,
+                None => unperturbed[t] += 1,
+            }
+        }
+        // 8 directions × 3 repetitions over 3 goals: each (goal, direction) once.
+        assert_eq!(seen.len(), 24);
+        assert!(seen.values().all(|n| *n == 1), "{seen:?}");
+        assert_eq!(unperturbed, [3, 3, 2]);
+        // The same shuffle: pulses sit in the same slots, at the same angles.
+        let angle = |t: &TrialTask| match t {
+            TrialTask::Reach { angle_deg, .. } => *angle_deg,
+            _ => None,
+        };
+        let p100 = schedule(&Protocol::builtin("reach-perturb").unwrap(), 42, 1);
+        assert_eq!(p100, one_goal);
+        assert!(
+            one_goal
+                .iter()
+                .all(|q| matches!(q.task, TrialTask::Reach { target: None, .. }))
+        );
+        let mut q = p.clone();
+        q.reach.as_mut().unwrap().targets_m.clear();
+        let without: Vec<_> = schedule(&q, 42, 1).iter().map(|q| angle(&q.task)).collect();
+        let with: Vec<_> = plans.iter().map(|q| angle(&q.task)).collect();
+        assert_eq!(with, without);
+        // The reaches to each goal: the trigger at 0.4 of the way on the longer axis.
+        assert!((r.trigger_fraction() - 0.4).abs() < 1e-12);
+        let sideways = r.toward(0).unwrap();
+        assert_eq!(sideways.goal_m, [0.1, -0.125]);
+        assert_eq!(sideways.trigger_axis, Axis::X);
+        assert!((sideways.trigger_position_m - 0.04).abs() < 1e-12);
+        assert!(sideways.targets_m.is_empty());
+        let ahead = r.toward(1).unwrap();
+        assert_eq!(ahead.trigger_axis, Axis::Y);
+        assert!((ahead.trigger_position_m - (-0.125 + 0.4 * 0.2)).abs() < 1e-12);
+        let back_left = r.toward(2).unwrap();
+        assert_eq!(back_left.trigger_axis, Axis::Y);
+        assert!((back_left.trigger_position_m - (-0.125 + 0.4 * 0.08)).abs() < 1e-12);
+        assert!(r.toward(3).is_none());
+        // The protocol a trial runs with is the reach to its own goal.
+        let plan = plans
+            .iter()
+            .find(|q| {
+                matches!(
+                    q.task,
+                    TrialTask::Reach {
+                        target: Some(0),
+                        ..
+                    }
+                )
+            })
+            .unwrap();
+        assert_eq!(trial::for_plan(&p, plan).reach().goal_m, [0.1, -0.125]);
+        assert_eq!(
+            trial_meta(&trial::for_plan(&p, plan), plan, None).goal_m,
+            Some([0.1, -0.125])
+        );
+    }
+}

@@ -28,6 +28,9 @@ pub enum TrialTask {
     Reach {
         /// Pulse direction, degrees from +x toward +y.
         angle_deg: Option<f64>,
+        /// The centre-out goal (an index into `reach.targets_m`); `None`, the
+        /// protocol's `goal_m`.
+        target: Option<usize>,
     },
     /// Force holding during the imposed motion (001_*).
     Hold {
@@ -45,6 +48,30 @@ pub struct TrialPlan {
     pub index: u32,
     /// What is done.
     pub task: TrialTask,
+}
+
+/// The protocol `plan`'s trial runs with: `protocol` itself, or, for a reach to a
+/// centre-out goal, a copy whose reach is the one to that goal
+/// ([`crate::protocol::ReachConfig::toward`]), which is also what its manifest entry
+/// records as the trial's goal.
+#[must_use]
+pub fn for_plan<'a>(protocol: &'a Protocol, plan: &TrialPlan) -> std::borrow::Cow<'a, Protocol> {
+    use std::borrow::Cow;
+    let TrialTask::Reach {
+        target: Some(target),
+        ..
+    } = plan.task
+    else {
+        return Cow::Borrowed(protocol);
+    };
+    match protocol.reach.as_ref().and_then(|r| r.toward(target)) {
+        Some(reach) => {
+            let mut p = protocol.clone();
+            p.reach = Some(reach);
+            Cow::Owned(p)
+        }
+        None => Cow::Borrowed(protocol),
+    }
 }
 
 /// Ticks of a duration in seconds (validated to be whole).
@@ -237,7 +264,9 @@ pub fn controller_parts(
     trial_task(protocol, subject, plan, &mut ctl_cfg);
     let controller = Controller::new(ctl_cfg)?;
     let pulse = match plan.task {
-        TrialTask::Reach { angle_deg: Some(a) } if with_perturbation => {
+        TrialTask::Reach {
+            angle_deg: Some(a), ..
+        } if with_perturbation => {
             let r = protocol.reach();
             let axis = r.trigger_axis.index();
             let direction = if r.goal_m[axis] >= r.start_m[axis] {

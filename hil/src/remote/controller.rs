@@ -163,6 +163,8 @@ pub fn run<T: Transport>(
     let mut session_tick = 0;
     for (k, plan) in plans.iter().enumerate() {
         let id = trial_id(plan.index, plans.len())?;
+        // A centre-out reach runs as a reach to its own goal.
+        let protocol = &*trial::for_plan(protocol, plan);
         // Built before the hand-over, so that the trial's tick 0 follows the plant's
         // first frame of it by no more than the loop's own latency.
         let parts = trial::controller_parts(protocol, subject, session_seed, plan, true)?;

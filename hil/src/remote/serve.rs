@@ -184,7 +184,10 @@ fn serve_loop<T: Transport, C: Clock>(
         if rows.is_empty() {
             return;
         }
-        let _ = tx.send((trial_meta(protocol, plan, None), rows));
+        let _ = tx.send((
+            trial_meta(&trial::for_plan(protocol, plan), plan, None),
+            rows,
+        ));
         report.recorded.push(plan.index + 1);
         if let Some(t) = r.first_stall {
             report.first_stall.push((plan.index + 1, t));
@@ -217,7 +220,12 @@ fn serve_loop<T: Transport, C: Clock>(
                         let plan = &plans[i];
                         running = Some(Running {
                             plan: i,
-                            sim: trial::plant(protocol, subject, session_seed, plan)?,
+                            sim: trial::plant(
+                                &trial::for_plan(protocol, plan),
+                                subject,
+                                session_seed,
+                                plan,
+                            )?,
                             recorder: Recorder::new(div, n_ticks),
                             tick: 0,
                             estop_pressed_at: None,

@@ -307,8 +307,12 @@ fn nrmse_summary(pairs: &[(&rigtwin_device::estimate::VariationalDynamics, &Twin
 
 fn task_label(t: &TrialTask) -> String {
     match t {
-        TrialTask::Reach { angle_deg: None } => "reach".to_owned(),
-        TrialTask::Reach { angle_deg: Some(a) } => format!("reach {a:.0}°"),
+        TrialTask::Reach {
+            angle_deg: None, ..
+        } => "reach".to_owned(),
+        TrialTask::Reach {
+            angle_deg: Some(a), ..
+        } => format!("reach {a:.0}°"),
         TrialTask::Hold { condition } => {
             let axis = match condition.axis {
                 rigtwin_device::config::Axis::X => "x",
