@@ -32,11 +32,11 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
 use rigtwin::session::Session;
-use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, write_report};
+use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, reach_groups, write_report};
 use rigtwin_tests::generate_and_diagnose;
 use rigtwin_tests::generator::{
-    Design, EFFECTS, Generated, Hidden, OUT_OF_CATALOG, PAIRS, generate_design, generate_hidden,
-    parse_pulse,
+    CENTRE_OUT_M, Design, EFFECTS, Generated, Hidden, OUT_OF_CATALOG, PAIRS, generate_design,
+    generate_hidden, parse_pulse,
 };
 
 fn run(effect: &str, seed: u64) -> (Generated, Diagnosis) {
@@ -546,6 +546,37 @@ fn cardinal_pulses_are_fitted_on_groups_of_repetitions() {
     assert_eq!(d.hand_repetition_groups, Some(2));
     let (_, d) = check_design("handle-mass", 1003, &design, 0.6);
     assert_eq!((d.hand_units, d.hand_test_units), (4, Some(12)));
+}
+
+/// Centre-out reaches ([`Design::centre_out`]: the shared layout's 32 reaches to three
+/// goals 0.18 m away at 45°, 90° and 135°, each goal with one pulse in each of the eight
+/// directions). The hand balance's reference for a pulse must be its own goal's
+/// unperturbed reaches: the mean of every reach, or of the reaches crossing the same
+/// line, moves elsewhere. `reach_groups` finds the three goals from the recorded
+/// positions alone, every pulse gets a reference, and nothing is named on seed 2000; a
+/// grip (seed 1000, 5.93 kN/m) is found within 20 % with a held-out gain of at least
+/// 0.75.
+#[test]
+fn centre_out_reaches_are_referenced_to_their_own_goal() {
+    let design = Design::centre_out();
+    let tmp = tempfile::tempdir().unwrap();
+    let (g, d) = generate_and_diagnose("none", 2000, &design, &tmp.path().join("out")).unwrap();
+    assert_finds_nothing(&d, "seed 2000");
+    assert_eq!(d.hand_reaches, Some(3));
+    assert_eq!(d.hand_trials_used, 24);
+    let s = Session::read(&g.dir).unwrap();
+    let (of_trial, directions) = reach_groups(&s);
+    assert!(of_trial.iter().all(Option::is_some), "{of_trial:?}");
+    // Each found direction is a goal's, within 3° (end points scatter by a few mm).
+    for goal in CENTRE_OUT_M {
+        let want = (goal[1] + 0.125).atan2(goal[0]);
+        let near = directions
+            .iter()
+            .any(|u| (u[1].atan2(u[0]) - want).abs() < 3f64.to_radians());
+        assert!(near, "goal {goal:?} not among {directions:?}");
+    }
+    let (_, d) = check_design("grip-compliance", 1000, &design, 0.75);
+    assert_eq!(d.hand_reaches, Some(3));
 }
 
 /// A subject whose arm is heavier than the tables the diagnosis takes it from (every

@@ -406,6 +406,12 @@ pub struct Diagnosis {
     /// group `i mod n`). Absent otherwise.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub hand_repetition_groups: Option<usize>,
+    /// With reaches in several directions (a centre-out task's goals, or reaches out
+    /// and back), how many the hand balance told apart: each perturbed trial's
+    /// reference is the mean of the unperturbed trials of its own reach
+    /// (`hand_signals::reach_groups`). Absent when every reach goes one way.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hand_reaches: Option<usize>,
     /// Independent units the hand balance's significance is tested on (one per
     /// repetition of a pair of opposite directions), when the fitted units average
     /// repetitions.
@@ -1600,6 +1606,7 @@ fn diagnose_units(
         hand_units: 0,
         hand_test_units: None,
         hand_repetition_groups: None,
+        hand_reaches: None,
         hand_baseline_nrmse: None,
         hand_noise_floor_nrmse: None,
         hand_baseline: BTreeMap::new(),
@@ -2269,6 +2276,8 @@ fn rank_hand(
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
             d.hand_repetition_groups = h.repetition_groups;
+            let reaches = crate::hand_signals::reach_groups(session).1.len();
+            d.hand_reaches = (reaches > 1).then_some(reaches);
             let w = &h.whitening;
             d.hand_weighting_source = Some(w.source.as_str().to_string());
             d.hand_weighting = [
@@ -3217,7 +3226,10 @@ fn evidence(
                     r.units()
                 ),
                 (None, _) => "averaged responses".to_string(),
-            },
+            } + &d
+                .hand_reaches
+                .map(|n| format!(", on {n} reaches each with its own references"))
+                .unwrap_or_default(),
             super::hand_signals::HAND_WINDOW_S,
             p("d11_n_s_per_m"),
             p("d12_n_s_per_m"),

@@ -7,7 +7,10 @@
 //! position along the reach at the onset (the rig fires the pulse when the measured
 //! position along the reach, `y` on the Börner rig, crosses a line, so this is the same
 //! moment of the reach; the axis is the one the session's trials span more,
-//! [`reach_axis`]), and resampled at the perturbed trial's pace: a lab's
+//! [`reach_axis`]; in a session of reaches in several directions, a centre-out task's
+//! goals or reaches out and back, the references are the unperturbed trials of the
+//! perturbed trial's own reach, [`reach_groups`], along the axis that reach travels
+//! along more), and resampled at the perturbed trial's pace: a lab's
 //! reaches vary in duration from trial to trial, and a reference that moves at the
 //! session's mean pace differs from a faster or slower trial by a velocity and a force
 //! that grow over the window, which the balance reads as a reflex's gain. With `κ` the
@@ -398,7 +401,13 @@ pub enum OddUnits {
 ///   own noise does not average out over directions but cancels in the difference.
 ///
 /// The arm matrices are averaged over both directions (the unperturbed posture's, up to
-/// the even terms). [`OddUnits`] says whether the repetitions are averaged first or
+/// the even terms). On reaches in several directions ([`reach_groups`]) the pairs
+/// span the reaches: each response is already taken about its own reach, and when
+/// every goal gets each direction equally often (a balanced centre-out design) the
+/// even terms cancel in the means as on one reach, while each unit still averages
+/// every repetition. Pairing within a goal instead leaves one repetition per unit,
+/// whose fits the arm's motor noise biases (see [`odd_groups`]; measured in
+/// `hil/docs/notes/2026-12-07-centre-out.md`). [`OddUnits`] says whether the repetitions are averaged first or
 /// paired one by one. `None` with fewer than [`MIN_OPPOSITE_PAIRS`] pairs of
 /// directions, or when the responses differ in shape.
 #[must_use]
@@ -656,6 +665,56 @@ pub fn reach_axis(session: &Session) -> usize {
     usize::from(x <= y)
 }
 
+/// Reaches whose directions lie within this angle of a reach's mean direction are
+/// one reach (one goal of a centre-out task), degrees. A lab's reach scatters its
+/// direction by a few degrees (the generator's end points by up to 5 mm over 0.2–0.25 m:
+/// under 3°); centre-out goals lie 30° or more apart.
+pub const SAME_REACH_DEG: f64 = 15.0;
+/// Shortest way from a trial's first to its last sample for it to be a reach, m:
+/// shorter ones (a trial held in place) go to no reach.
+pub const MIN_REACH_M: f64 = 0.02;
+
+/// Which reach each of the session's trials made, in the order of [`Session::iter`]:
+/// the direction of its way from its first recorded position to its last, grouped
+/// with the first reach whose mean direction is within [`SAME_REACH_DEG`] of it
+/// (`None` for a trial that moves less than [`MIN_REACH_M`]). A centre-out session
+/// gives one reach per goal, and reaches out and back give two. Returns the reach
+/// of each trial and the unit vector of each reach's mean direction.
+#[must_use]
+pub fn reach_groups(session: &Session) -> (Vec<Option<usize>>, Vec<[f64; 2]>) {
+    let cos_same = SAME_REACH_DEG.to_radians().cos();
+    let mut sums: Vec<[f64; 2]> = Vec::new();
+    let unit = |v: [f64; 2]| {
+        let n = v[0].hypot(v[1]);
+        [v[0] / n, v[1] / n]
+    };
+    let of_trial: Vec<Option<usize>> = session
+        .iter()
+        .map(|(_, t)| {
+            let way = match (t.x_m.first(), t.x_m.last(), t.y_m.first(), t.y_m.last()) {
+                (Some(x0), Some(x1), Some(y0), Some(y1)) => [x1 - x0, y1 - y0],
+                _ => return None,
+            };
+            let length = way[0].hypot(way[1]);
+            if !(length.is_finite() && length >= MIN_REACH_M) {
+                return None;
+            }
+            let u = unit(way);
+            let found = sums.iter().position(|s| {
+                let m = unit(*s);
+                m[0] * u[0] + m[1] * u[1] >= cos_same
+            });
+            let g = found.unwrap_or_else(|| {
+                sums.push([0.0; 2]);
+                sums.len() - 1
+            });
+            sums[g] = [sums[g][0] + u[0], sums[g][1] + u[1]];
+            Some(g)
+        })
+        .collect();
+    (of_trial, sums.into_iter().map(unit).collect())
+}
+
 /// First crossing of `level` by `y` in direction `dir` (sign of the rate), as a
 /// fractional index.
 fn crossing(y: &[f64], level: f64, dir: f64) -> Option<f64> {
@@ -762,12 +821,27 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
         )));
     }
     use rayon::prelude::*;
-    let axis = reach_axis(session);
-    // The smoothed velocity along it.
-    let speed = 2 + axis;
-    let refs: Vec<Smoothed> = unperturbed
+    // Each reach's references are its own unperturbed trials, aligned along the axis it
+    // travels along more; with one reach, every unperturbed trial along the session's.
+    let (reach_of, directions) = reach_groups(session);
+    let one_reach = directions.len() <= 1;
+    let session_axis = reach_axis(session);
+    let axis_of = |g: Option<usize>| match g.and_then(|g| directions.get(g)) {
+        Some(u) if !one_reach => usize::from(u[0].abs() <= u[1].abs()),
+        _ => session_axis,
+    };
+    let reach_of_id = |id: u32| {
+        pairs
+            .iter()
+            .position(|(e, _)| e.id == id)
+            .and_then(|i| reach_of.get(i).copied().flatten())
+    };
+    let refs: Vec<(Option<usize>, Smoothed)> = unperturbed
         .par_iter()
-        .map(|(e, t)| smooth(e, t, rate, m_h, axis))
+        .map(|(e, t)| {
+            let g = reach_of_id(e.id);
+            smooth(e, t, rate, m_h, axis_of(g)).map(|s| (g, s))
+        })
         .collect::<Result<_, _>>()?;
     let damping = session.manifest.device.damping_n_s_per_m;
     let lead = (HAND_LEAD_S * rate).ceil() as usize;
@@ -780,6 +854,13 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             let Some(pert) = &e.perturbation else {
                 return Ok(None);
             };
+            let g = reach_of_id(e.id);
+            if !one_reach && g.is_none() {
+                return Ok(None);
+            }
+            let axis = axis_of(g);
+            // The smoothed velocity along it.
+            let speed = 2 + axis;
             let p = smooth(e, t, rate, m_h, axis)?;
             let t0 = t.t_s.first().copied().unwrap_or(0.0);
             let k0f = (pert.onset_s - t0) * rate;
@@ -798,13 +879,14 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             let aligned: Vec<(usize, f64, f64)> = refs
                 .iter()
                 .enumerate()
-                .filter_map(|(u, r)| crossing(&r.along_raw, level, dir).map(|c| (u, c)))
+                .filter(|(_, (rg, _))| one_reach || *rg == g)
+                .filter_map(|(u, (_, r))| crossing(&r.along_raw, level, dir).map(|c| (u, c)))
                 .map(|(u, c)| {
-                    let kappa = pace_ratio(v_trial, interp(&refs[u].ch[speed], c).unwrap_or(0.0));
+                    let kappa = pace_ratio(v_trial, interp(&refs[u].1.ch[speed], c).unwrap_or(0.0));
                     (u, c, kappa)
                 })
                 .filter(|(u, c, kappa)| {
-                    let last = refs[*u].along_raw.len() as f64 - 1.0;
+                    let last = refs[*u].1.along_raw.len() as f64 - 1.0;
                     let first = c - kappa * lead as f64;
                     first >= 0.0 && c + kappa * len as f64 <= last
                 })
@@ -822,7 +904,7 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
                     let mean = aligned
                         .iter()
                         .filter_map(|(u, cu, kappa)| {
-                            let read = |ch: usize| interp(&refs[*u].ch[ch], cu + kappa * at);
+                            let read = |ch: usize| interp(&refs[*u].1.ch[ch], cu + kappa * at);
                             at_pace(c, *kappa, damping, read)
                         })
                         .sum::<f64>()

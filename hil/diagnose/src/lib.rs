@@ -83,8 +83,8 @@ pub use hand::{
     StretchReflex, SubjectArm, hand_fit_rows, hand_grams, judge_hand,
 };
 pub use hand_signals::{
-    ArmPosture, HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, MUSCLE_PAIRS,
-    hand_responses,
+    ArmPosture, HAND_LEAD_S, HAND_WINDOW_S, HandArm, HandData, HandResponse, MIN_REACH_M,
+    MUSCLE_PAIRS, SAME_REACH_DEG, hand_responses, reach_groups,
 };
 pub use joint::{Joint, Member, MemberParameters};
 pub use model::ExtendedModel;

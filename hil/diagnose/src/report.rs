@@ -210,7 +210,10 @@ pub fn table(d: &Diagnosis) -> String {
                     " (odd parts of opposite pulses, each pair's repetitions in {g} groups; t-test on {n} repetitions)"
                 ),
                 (None, _) => String::new(),
-            },
+            } + &d
+                .hand_reaches
+                .map(|n| format!(" on {n} reaches, each with its own references"))
+                .unwrap_or_default(),
             d.hand_arm_inertia_scale
                 .map(|f| format!(" (×{f:.2} of it fits best given the named effects)"))
                 .unwrap_or_default(),
