@@ -801,15 +801,21 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
         return Err(DiscrepancyError::RateTooLow { rate_hz: rate });
     }
     let m_h = session.manifest.device.handle_mass_kg.unwrap_or(0.0);
-    let pairs: Vec<(&TrialEntry, &Trial)> = session.iter().collect();
-    let has_pulse = |t: &Trial| t.pert_fx_n.iter().chain(&t.pert_fy_n).any(|v| *v != 0.0);
-    let perturbed: Vec<&(&TrialEntry, &Trial)> = pairs
+    // Each trial with the reach it made ([`reach_groups`]).
+    let (reach_of, directions) = reach_groups(session);
+    let trials: Vec<(&TrialEntry, &Trial, Option<usize>)> = session
         .iter()
-        .filter(|(e, t)| e.perturbation.is_some() && has_pulse(t))
+        .zip(reach_of)
+        .map(|((e, t), g)| (e, t, g))
         .collect();
-    let unperturbed: Vec<&(&TrialEntry, &Trial)> = pairs
+    let has_pulse = |t: &Trial| t.pert_fx_n.iter().chain(&t.pert_fy_n).any(|v| *v != 0.0);
+    let perturbed: Vec<&(&TrialEntry, &Trial, Option<usize>)> = trials
         .iter()
-        .filter(|(e, t)| e.perturbation.is_none() && !has_pulse(t))
+        .filter(|(e, t, _)| e.perturbation.is_some() && has_pulse(t))
+        .collect();
+    let unperturbed: Vec<&(&TrialEntry, &Trial, Option<usize>)> = trials
+        .iter()
+        .filter(|(e, t, _)| e.perturbation.is_none() && !has_pulse(t))
         .collect();
     if perturbed.len() < MIN_PERTURBED || unperturbed.len() < MIN_REFERENCES {
         return Ok(HandData::Missing(format!(
@@ -823,25 +829,15 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
     use rayon::prelude::*;
     // Each reach's references are its own unperturbed trials, aligned along the axis it
     // travels along more; with one reach, every unperturbed trial along the session's.
-    let (reach_of, directions) = reach_groups(session);
     let one_reach = directions.len() <= 1;
     let session_axis = reach_axis(session);
     let axis_of = |g: Option<usize>| match g.and_then(|g| directions.get(g)) {
         Some(u) if !one_reach => usize::from(u[0].abs() <= u[1].abs()),
         _ => session_axis,
     };
-    let reach_of_id = |id: u32| {
-        pairs
-            .iter()
-            .position(|(e, _)| e.id == id)
-            .and_then(|i| reach_of.get(i).copied().flatten())
-    };
     let refs: Vec<(Option<usize>, Smoothed)> = unperturbed
         .par_iter()
-        .map(|(e, t)| {
-            let g = reach_of_id(e.id);
-            smooth(e, t, rate, m_h, axis_of(g)).map(|s| (g, s))
-        })
+        .map(|(e, t, g)| smooth(e, t, rate, m_h, axis_of(*g)).map(|s| (*g, s)))
         .collect::<Result<_, _>>()?;
     let damping = session.manifest.device.damping_n_s_per_m;
     let lead = (HAND_LEAD_S * rate).ceil() as usize;
@@ -850,134 +846,138 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
     let half = window_for_rate(rate) / 2;
     let out: Vec<Option<HandResponse>> = perturbed
         .par_iter()
-        .map(|(e, t)| -> Result<Option<HandResponse>, DiscrepancyError> {
-            let Some(pert) = &e.perturbation else {
-                return Ok(None);
-            };
-            let g = reach_of_id(e.id);
-            if !one_reach && g.is_none() {
-                return Ok(None);
-            }
-            let axis = axis_of(g);
-            // The smoothed velocity along it.
-            let speed = 2 + axis;
-            let p = smooth(e, t, rate, m_h, axis)?;
-            let t0 = t.t_s.first().copied().unwrap_or(0.0);
-            let k0f = (pert.onset_s - t0) * rate;
-            let k0 = k0f.ceil().max(0.0) as usize;
-            if k0 < lead + half || k0 + len + half >= t.len() {
-                return Ok(None);
-            }
-            let Some(level) = interp(&p.along_raw, k0f) else {
-                return Ok(None);
-            };
-            let dir = p.ch[speed][k0].signum();
-            let v_trial = interp(&p.ch[speed], k0f).unwrap_or(0.0);
-            let n = lead + len;
-            // Each reference: where it crosses the onset's level, and its pace ratio.
-            // Sample `i` of the trial reads the reference at `c + κ (i − k0f)`.
-            let aligned: Vec<(usize, f64, f64)> = refs
-                .iter()
-                .enumerate()
-                .filter(|(_, (rg, _))| one_reach || *rg == g)
-                .filter_map(|(u, (_, r))| crossing(&r.along_raw, level, dir).map(|c| (u, c)))
-                .map(|(u, c)| {
-                    let kappa = pace_ratio(v_trial, interp(&refs[u].1.ch[speed], c).unwrap_or(0.0));
-                    (u, c, kappa)
-                })
-                .filter(|(u, c, kappa)| {
-                    let last = refs[*u].1.along_raw.len() as f64 - 1.0;
-                    let first = c - kappa * lead as f64;
-                    first >= 0.0 && c + kappa * len as f64 <= last
-                })
-                .collect();
-            if aligned.len() < MIN_REFERENCES {
-                return Ok(None);
-            }
-            let mut d: [Vec<f64>; 10] = std::array::from_fn(|_| vec![0.0; n]);
-            // The reference's own acceleration and hand force (channels 4–7).
-            let mut reference = vec![[0.0; 4]; n];
-            for (c, dc) in d.iter_mut().enumerate() {
-                for (j, v) in dc.iter_mut().enumerate() {
-                    let i = k0 - lead + j;
-                    let at = i as f64 - k0f;
-                    let mean = aligned
-                        .iter()
-                        .filter_map(|(u, cu, kappa)| {
-                            let read = |ch: usize| interp(&refs[*u].1.ch[ch], cu + kappa * at);
-                            at_pace(c, *kappa, damping, read)
-                        })
-                        .sum::<f64>()
-                        / aligned.len() as f64;
-                    *v = p.ch[c][i] - mean;
-                    if (4..8).contains(&c) {
-                        reference[j][c - 4] = mean;
+        .map(
+            |(e, t, g)| -> Result<Option<HandResponse>, DiscrepancyError> {
+                let Some(pert) = &e.perturbation else {
+                    return Ok(None);
+                };
+                let g = *g;
+                if !one_reach && g.is_none() {
+                    return Ok(None);
+                }
+                let axis = axis_of(g);
+                // The smoothed velocity along it.
+                let speed = 2 + axis;
+                let p = smooth(e, t, rate, m_h, axis)?;
+                let t0 = t.t_s.first().copied().unwrap_or(0.0);
+                let k0f = (pert.onset_s - t0) * rate;
+                let k0 = k0f.ceil().max(0.0) as usize;
+                if k0 < lead + half || k0 + len + half >= t.len() {
+                    return Ok(None);
+                }
+                let Some(level) = interp(&p.along_raw, k0f) else {
+                    return Ok(None);
+                };
+                let dir = p.ch[speed][k0].signum();
+                let v_trial = interp(&p.ch[speed], k0f).unwrap_or(0.0);
+                let n = lead + len;
+                // Each reference: where it crosses the onset's level, and its pace ratio.
+                // Sample `i` of the trial reads the reference at `c + κ (i − k0f)`.
+                let aligned: Vec<(usize, f64, f64)> = refs
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, (rg, _))| one_reach || *rg == g)
+                    .filter_map(|(u, (_, r))| crossing(&r.along_raw, level, dir).map(|c| (u, c)))
+                    .map(|(u, c)| {
+                        let kappa =
+                            pace_ratio(v_trial, interp(&refs[u].1.ch[speed], c).unwrap_or(0.0));
+                        (u, c, kappa)
+                    })
+                    .filter(|(u, c, kappa)| {
+                        let last = refs[*u].1.along_raw.len() as f64 - 1.0;
+                        let first = c - kappa * lead as f64;
+                        first >= 0.0 && c + kappa * len as f64 <= last
+                    })
+                    .collect();
+                if aligned.len() < MIN_REFERENCES {
+                    return Ok(None);
+                }
+                let mut d: [Vec<f64>; 10] = std::array::from_fn(|_| vec![0.0; n]);
+                // The reference's own acceleration and hand force (channels 4–7).
+                let mut reference = vec![[0.0; 4]; n];
+                for (c, dc) in d.iter_mut().enumerate() {
+                    for (j, v) in dc.iter_mut().enumerate() {
+                        let i = k0 - lead + j;
+                        let at = i as f64 - k0f;
+                        let mean = aligned
+                            .iter()
+                            .filter_map(|(u, cu, kappa)| {
+                                let read = |ch: usize| interp(&refs[*u].1.ch[ch], cu + kappa * at);
+                                at_pace(c, *kappa, damping, read)
+                            })
+                            .sum::<f64>()
+                            / aligned.len() as f64;
+                        *v = p.ch[c][i] - mean;
+                        if (4..8).contains(&c) {
+                            reference[j][c - 4] = mean;
+                        }
                     }
                 }
-            }
-            let mut m_arm = Vec::with_capacity(n);
-            let mut s = Vec::with_capacity(n);
-            let mut activation: [Vec<Matrix2<f64>>; MUSCLE_PAIRS] =
-                std::array::from_fn(|_| Vec::with_capacity(n));
-            let mut held: [Vec<Matrix2<f64>>; 2] = std::array::from_fn(|_| Vec::with_capacity(n));
-            for (j, rf) in reference.iter().enumerate() {
-                let i = k0 - lead + j;
-                let Some(ArmPosture {
-                    m_arm: m,
-                    s: sh,
-                    jinv: ji,
-                    ..
-                }) = arm.at([p.ch[0][i], p.ch[1][i]])
-                else {
-                    return Ok(None);
-                };
-                // The reference's own motion and hand force at this sample.
-                let x = Vector2::new(p.ch[0][i] - d[0][j], p.ch[1][i] - d[1][j]);
-                let v = Vector2::new(p.ch[2][i] - d[2][j], p.ch[3][i] - d[3][j]);
-                let a = Vector2::new(rf[0], rf[1]);
-                let f = Vector2::new(rf[2], rf[3]);
-                let Some(tau) = arm.torque(x, v, a, f) else {
-                    return Ok(None);
-                };
-                let Some(g) = arm.held_torque_impedance(x, v, a, tau) else {
-                    return Ok(None);
-                };
-                for (out, shape) in activation
-                    .iter_mut()
-                    .zip(arm.pair_activation_shapes(tau, &ji))
-                {
-                    out.push(shape);
+                let mut m_arm = Vec::with_capacity(n);
+                let mut s = Vec::with_capacity(n);
+                let mut activation: [Vec<Matrix2<f64>>; MUSCLE_PAIRS] =
+                    std::array::from_fn(|_| Vec::with_capacity(n));
+                let mut held: [Vec<Matrix2<f64>>; 2] =
+                    std::array::from_fn(|_| Vec::with_capacity(n));
+                for (j, rf) in reference.iter().enumerate() {
+                    let i = k0 - lead + j;
+                    let Some(ArmPosture {
+                        m_arm: m,
+                        s: sh,
+                        jinv: ji,
+                        ..
+                    }) = arm.at([p.ch[0][i], p.ch[1][i]])
+                    else {
+                        return Ok(None);
+                    };
+                    // The reference's own motion and hand force at this sample.
+                    let x = Vector2::new(p.ch[0][i] - d[0][j], p.ch[1][i] - d[1][j]);
+                    let v = Vector2::new(p.ch[2][i] - d[2][j], p.ch[3][i] - d[3][j]);
+                    let a = Vector2::new(rf[0], rf[1]);
+                    let f = Vector2::new(rf[2], rf[3]);
+                    let Some(tau) = arm.torque(x, v, a, f) else {
+                        return Ok(None);
+                    };
+                    let Some(g) = arm.held_torque_impedance(x, v, a, tau) else {
+                        return Ok(None);
+                    };
+                    for (out, shape) in activation
+                        .iter_mut()
+                        .zip(arm.pair_activation_shapes(tau, &ji))
+                    {
+                        out.push(shape);
+                    }
+                    for (out, g) in held.iter_mut().zip(g) {
+                        out.push(g);
+                    }
+                    m_arm.push(m);
+                    s.push(sh);
                 }
-                for (out, g) in held.iter_mut().zip(g) {
-                    out.push(g);
+                for series in activation.iter_mut().chain(held.iter_mut()) {
+                    let mean = series[lead..].iter().sum::<Matrix2<f64>>() / (n - lead) as f64;
+                    series.iter_mut().for_each(|e| *e -= mean);
                 }
-                m_arm.push(m);
-                s.push(sh);
-            }
-            for series in activation.iter_mut().chain(held.iter_mut()) {
-                let mean = series[lead..].iter().sum::<Matrix2<f64>>() / (n - lead) as f64;
-                series.iter_mut().for_each(|e| *e -= mean);
-            }
-            let [x, y, vx, vy, ax, ay, fx, fy, fdx, fdy] = d;
-            Ok(Some(HandResponse {
-                id: e.id,
-                rate_hz: rate,
-                onset: lead,
-                angle_deg: pert.angle_deg,
-                dx: [x, y],
-                dv: [vx, vy],
-                da: [ax, ay],
-                df: [fx, fy],
-                dfd: [fdx, fdy],
-                m_arm,
-                s,
-                activation,
-                held,
-                rows: (lead..n).step_by(decim).collect(),
-                references: aligned.len(),
-                trials: vec![e.id],
-            }))
-        })
+                let [x, y, vx, vy, ax, ay, fx, fy, fdx, fdy] = d;
+                Ok(Some(HandResponse {
+                    id: e.id,
+                    rate_hz: rate,
+                    onset: lead,
+                    angle_deg: pert.angle_deg,
+                    dx: [x, y],
+                    dv: [vx, vy],
+                    da: [ax, ay],
+                    df: [fx, fy],
+                    dfd: [fdx, fdy],
+                    m_arm,
+                    s,
+                    activation,
+                    held,
+                    rows: (lead..n).step_by(decim).collect(),
+                    references: aligned.len(),
+                    trials: vec![e.id],
+                }))
+            },
+        )
         .collect::<Result<_, _>>()?;
     let responses: Vec<HandResponse> = out.into_iter().flatten().collect();
     if responses.len() < MIN_PERTURBED {

@@ -110,10 +110,7 @@ pub(crate) fn replay_trial(
                 // A reach to another goal (a centre-out session's): its pulse fires at
                 // the protocol's fraction of its own way, on the axis it travels along
                 // more, as the rehearsal fired it.
-                r.targets_m = vec![g];
-                if let Some(toward) = r.toward(0) {
-                    *r = toward;
-                }
+                *r = r.toward_goal(g);
             }
             r.start_m = s;
             r.goal_m = g;

@@ -246,8 +246,15 @@ impl ReachConfig {
     /// `targets_m` has no such goal.
     #[must_use]
     pub fn toward(&self, target: usize) -> Option<ReachConfig> {
+        self.targets_m.get(target).map(|g| self.toward_goal(*g))
+    }
+
+    /// The reach to `goal` (rig frame, m) as [`Self::toward`] makes it: `goal_m` that
+    /// goal, no `targets_m`, the trigger at [`Self::trigger_fraction`] of its way on the
+    /// axis it travels along more.
+    #[must_use]
+    pub fn toward_goal(&self, goal: [f64; 2]) -> ReachConfig {
         use rigtwin_device::config::Axis;
-        let goal = *self.targets_m.get(target)?;
         let fraction = self.trigger_fraction();
         let way = [goal[0] - self.start_m[0], goal[1] - self.start_m[1]];
         let axis = if way[0].abs() > way[1].abs() {
@@ -256,13 +263,13 @@ impl ReachConfig {
             Axis::Y
         };
         let i = axis.index();
-        Some(ReachConfig {
+        ReachConfig {
             goal_m: goal,
             trigger_axis: axis,
             trigger_position_m: self.start_m[i] + fraction * way[i],
             targets_m: Vec::new(),
             ..self.clone()
-        })
+        }
     }
 }
 
@@ -815,8 +822,10 @@ impl Protocol {
                 format!("must lie strictly between start ({a}) and goal ({b}) on the trigger axis, got {line}"),
             );
         }
-        let dist =
-            ((r.goal_m[0] - r.start_m[0]).powi(2) + (r.goal_m[1] - r.start_m[1]).powi(2)).sqrt();
+        // The way from the start to a goal, m.
+        let way_m =
+            |g: [f64; 2]| ((g[0] - r.start_m[0]).powi(2) + (g[1] - r.start_m[1]).powi(2)).sqrt();
+        let dist = way_m(r.goal_m);
         if dist.is_finite() && dist < 1e-3 {
             c.fail("reach.goal_m", "must be at least 1 mm from reach.start_m");
         }
@@ -825,7 +834,7 @@ impl Protocol {
             for (a, v) in g.iter().enumerate() {
                 c.inside(&format!("{key}[{a}]"), *v, wall);
             }
-            let way = ((g[0] - r.start_m[0]).powi(2) + (g[1] - r.start_m[1]).powi(2)).sqrt();
+            let way = way_m(*g);
             if way.is_finite() && way < 0.02 {
                 c.fail(
                     &key,
