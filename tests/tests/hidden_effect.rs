@@ -296,6 +296,66 @@ fn run_without_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
     (g, d)
 }
 
+/// The seed's session of the shared layout without the first perturbed trial at 30°,
+/// at 60° and at 120°: trials a lab set aside (the subject missed, the pulse came
+/// late), so that three of the four pairs of opposite directions have two repetitions
+/// on one side and three on the other.
+fn run_without_three_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
+    let tmp = tempfile::tempdir().unwrap();
+    let g = generate_design(effect, seed, &Design::SHARED, &tmp.path().join("out")).unwrap();
+    let mut s = Session::read(&g.dir).unwrap();
+    let mut left_out = Vec::new();
+    let keep: Vec<bool> = s
+        .manifest
+        .trials
+        .iter()
+        .map(|t| {
+            let Some(angle) = t.perturbation.as_ref().map(|p| p.angle_deg.round() as i64) else {
+                return true;
+            };
+            if [30, 60, 120].contains(&angle) && !left_out.contains(&angle) {
+                left_out.push(angle);
+                return false;
+            }
+            true
+        })
+        .collect();
+    assert_eq!(left_out.len(), 3);
+    let mut k = keep.iter();
+    s.manifest.trials.retain(|_| *k.next().unwrap());
+    let mut k = keep.iter();
+    s.trials.retain(|_| *k.next().unwrap());
+    let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
+    (g, d)
+}
+
+/// Uneven repetitions: with three pulses set aside the hand balance's units are the
+/// odd parts of each pair's means over the repetitions left (3 against 2), and its
+/// t-test takes the 9 repetitions that still have a match. Nothing is named on seed
+/// 2000, and a heavier handle (seed 1003, 0.725 kg) is named within 20 % with a
+/// held-out gain of at least 0.6. Measured with three pulses drawn at random from each
+/// session: nothing named on 20 of 20 seeds 2000–2019, the handle within 10 % on 10 of
+/// 10 and a grip within 3 % on 5 of 5 (README, "Sessions with pulses set aside").
+#[test]
+fn a_session_with_pulses_set_aside_pairs_what_is_left() {
+    let (_, d) = run_without_three_pulses("none", 2000);
+    assert_finds_nothing(&d, "seed 2000");
+    assert_eq!(d.hand_trials_used, 21);
+    assert_eq!((d.hand_units, d.hand_test_units), (4, Some(9)));
+    let (g, d) = run_without_three_pulses("handle-mass", 1003);
+    let (hidden, found) = (
+        g.hidden.parameters["extra_mass_kg"],
+        d.parameters["extra_mass_kg"],
+    );
+    eprintln!(
+        "handle: {:?}, {found} kg for {hidden} kg, gain {:?}",
+        d.cause, d.gain
+    );
+    assert_eq!(d.cause, "handle-mass");
+    assert!((found - hidden).abs() <= 0.2 * hidden);
+    assert!(d.gain.unwrap() >= 0.6, "gain {:?}", d.gain);
+}
+
 /// Reaches without pulses: the admittance then makes the carts' velocity
 /// `(F − M a)/D`, so a viscous friction `b v` beside the motor gains `γ u` with
 /// `b = γ D` is a mass and a term that follows the current loop's noise the command
