@@ -191,9 +191,12 @@ pub struct ReachConfig {
     pub trigger_position_m: f64,
     /// Centre-out reaches: the goals, rig frame, m, every reach starting at `start_m`
     /// (empty, the default: every reach goes to `goal_m`). The unperturbed reaches go to
-    /// them in turn, and the `r`-th repetition of every pulse direction to goal
-    /// `r mod n`, so that with repetitions a multiple of `n` each goal sees every
-    /// direction equally often; the schedule's shuffle then places them. A reach's
+    /// them in turn, and the `r`-th repetition of a pulse direction on the `p`-th pulse
+    /// axis (`θ` and `θ + 180°` share one, numbered in the order of `angles_deg`) to
+    /// goal `(r + p) mod n`: with repetitions a multiple of `n` each goal sees every
+    /// direction equally often, opposite directions' repetitions go to one goal (the
+    /// pairs the diagnosis's hand balance takes), and with fewer repetitions than goals
+    /// the pulse axes spread over the goals; the schedule's shuffle then places them. A reach's
     /// pulse fires at the same fraction of its way as `trigger_position_m` is of the
     /// way from `start_m` to `goal_m` on `trigger_axis`, on the crossing of the axis it
     /// travels along more ([`ReachConfig::toward`]).

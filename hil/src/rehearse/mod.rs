@@ -289,17 +289,18 @@ pub fn schedule(protocol: &Protocol, session_seed: u64, subject: u32) -> Vec<Tri
         ProtocolKind::ReachPerturb => {
             let r = protocol.reach();
             let mut rng = ChaCha8Rng::seed_from_u64(seed::schedule_seed(session_seed, subject));
-            // Centre-out: the r-th repetition of every direction to goal r mod n, the
-            // unperturbed reaches to the goals in turn.
+            // Centre-out: the r-th repetition of a direction on the p-th pulse axis to
+            // goal (r + p) mod n, the unperturbed reaches to the goals in turn.
             let goals = r.targets_m.len();
             let target = |i: usize| (goals > 0).then(|| i % goals);
+            let axes = pulse_axes(&r.angles_deg);
             let mut slots: Vec<(Option<f64>, Option<usize>)> =
                 vec![(None, None); r.trials as usize];
             let mut k = 0;
             for rep in 0..r.repetitions as usize {
-                for a in &r.angles_deg {
+                for (a, axis) in r.angles_deg.iter().zip(&axes) {
                     if let Some(slot) = slots.get_mut(k) {
-                        *slot = (Some(*a), target(rep));
+                        *slot = (Some(*a), target(rep + axis));
                     }
                     k += 1;
                 }
@@ -329,6 +330,24 @@ pub fn schedule(protocol: &Protocol, session_seed: u64, subject: u32) -> Vec<Tri
         .map(|(i, task)| TrialPlan {
             index: u32::try_from(i).unwrap_or(u32::MAX),
             task,
+        })
+        .collect()
+}
+
+/// The pulse axis of each direction: the index, in order of first appearance, of the
+/// line it lies on (`θ` and `θ + 180°`, in whole degrees, share one). A centre-out
+/// schedule sends the `r`-th repetitions of opposite directions to one goal, so that
+/// their responses, which the hand balance pairs, are taken in one posture.
+fn pulse_axes(angles_deg: &[f64]) -> Vec<usize> {
+    let mut lines: Vec<i64> = Vec::new();
+    angles_deg
+        .iter()
+        .map(|a| {
+            let line = (a.round() as i64).rem_euclid(180);
+            lines.iter().position(|l| *l == line).unwrap_or_else(|| {
+                lines.push(line);
+                lines.len() - 1
+            })
         })
         .collect()
 }
@@ -878,7 +897,8 @@ mod tests {
     use rigtwin_device::config::Axis;
 
     /// A centre-out schedule gives every goal each pulse direction once per
-    /// `n` repetitions and the unperturbed reaches in turn; each goal's reach fires its
+    /// `n` repetitions and the unperturbed reaches in turn, opposite directions to one
+    /// goal, and with fewer repetitions than goals pulses to every goal; each goal's reach fires its
     /// pulse at the protocol's fraction of the way (0.4) on the axis it travels along
     /// more; without goals the schedule is the one-goal protocol's, slot for slot.
     #[test]
@@ -908,6 +928,26 @@ mod tests {
         assert_eq!(seen.len(), 24);
         assert!(seen.values().all(|n| *n == 1), "{seen:?}");
         assert_eq!(unperturbed, [3, 3, 2]);
+        // With one repetition the pulses still reach every goal, and each direction
+        // shares its goal with the opposite one (the pair the hand balance takes).
+        let mut once = p.clone();
+        once.reach.as_mut().unwrap().repetitions = 1;
+        let mut goal_of = BTreeMap::new();
+        for plan in schedule(&once, 42, 1) {
+            if let TrialTask::Reach {
+                angle_deg: Some(a),
+                target,
+            } = plan.task
+            {
+                goal_of.insert(a.round() as i64, target.unwrap());
+            }
+        }
+        assert_eq!(goal_of.len(), 8);
+        for (a, g) in goal_of.range(..180) {
+            assert_eq!(goal_of[&(a + 180)], *g, "{goal_of:?}");
+        }
+        let used: std::collections::BTreeSet<usize> = goal_of.values().copied().collect();
+        assert_eq!(used.len(), 3, "{goal_of:?}");
         // The same shuffle: pulses sit in the same slots, at the same angles.
         let angle = |t: &TrialTask| match t {
             TrialTask::Reach { angle_deg, .. } => *angle_deg,
