@@ -196,10 +196,10 @@ pub struct ReachConfig {
     /// goal `(r + p) mod n`: with repetitions a multiple of `n` each goal sees every
     /// direction equally often, opposite directions' repetitions go to one goal (the
     /// pairs the diagnosis's hand balance takes), and with fewer repetitions than goals
-    /// the pulse axes spread over the goals; the schedule's shuffle then places them. A reach's
-    /// pulse fires at the same fraction of its way as `trigger_position_m` is of the
-    /// way from `start_m` to `goal_m` on `trigger_axis`, on the crossing of the axis it
-    /// travels along more ([`ReachConfig::toward`]).
+    /// the pulse axes spread over the goals; the schedule's shuffle then places them.
+    /// A reach's pulse fires at the same fraction of its way as `trigger_position_m` is
+    /// of the way from `start_m` to `goal_m` on `trigger_axis`, on the crossing of the
+    /// axis it travels along more ([`ReachConfig::toward`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub targets_m: Vec<[f64; 2]>,
 }

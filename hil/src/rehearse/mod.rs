@@ -896,11 +896,12 @@ mod tests {
     use super::*;
     use rigtwin_device::config::Axis;
 
-    /// A centre-out schedule gives every goal each pulse direction once per
-    /// `n` repetitions and the unperturbed reaches in turn, opposite directions to one
-    /// goal, and with fewer repetitions than goals pulses to every goal; each goal's reach fires its
-    /// pulse at the protocol's fraction of the way (0.4) on the axis it travels along
-    /// more; without goals the schedule is the one-goal protocol's, slot for slot.
+    /// A centre-out schedule gives every goal each pulse direction once per `n`
+    /// repetitions and the unperturbed reaches in turn, opposite directions to one
+    /// goal, and with fewer repetitions than goals pulses to every goal; each goal's
+    /// reach fires its pulse at the protocol's fraction of the way (0.4) on the axis it
+    /// travels along more; without goals the schedule is the one-goal protocol's, slot
+    /// for slot.
     #[test]
     fn centre_out_goals_share_the_pulses_and_the_trigger_fraction() {
         let mut p = Protocol::builtin("reach-perturb").unwrap();
