@@ -334,7 +334,7 @@ fn run_without_three_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 /// t-test takes the 9 repetitions that still have a match. Nothing is named on seed
 /// 2000, and a heavier handle (seed 1003, 0.725 kg) is named within 20 % with a
 /// held-out gain of at least 0.6. Measured with three pulses drawn at random from each
-/// session: nothing named on 20 of 20 seeds 2000–2019, the handle within 10 % on 10 of
+/// session: nothing named on 50 of 50 seeds 2000–2049, the handle within 10 % on 10 of
 /// 10 and a grip within 3 % on 5 of 5 (README, "Sessions with pulses set aside").
 #[test]
 fn a_session_with_pulses_set_aside_pairs_what_is_left() {
