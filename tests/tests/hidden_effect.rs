@@ -31,7 +31,7 @@
 //! the false-alarm rate on sessions hiding nothing.
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use rigtwin::session::Session;
+use rigtwin::session::{Session, TrialEntry};
 use rigtwin_diagnose::{DiagnoseOptions, Diagnosis, diagnose, reach_groups, write_report};
 use rigtwin_tests::generate_and_diagnose;
 use rigtwin_tests::generator::{
@@ -278,20 +278,26 @@ fn recording_rates_from_500_hz_to_4_khz_give_the_same_answer() {
 /// The seed's session of the shared layout with its perturbed trials left out: the
 /// unperturbed reaches alone, as a lab records them in a familiarisation block.
 fn run_without_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
+    run_keeping(effect, seed, 8, |t| t.perturbation.is_none())
+}
+
+/// The seed's session of the shared layout with only the trials `keep` accepts (in
+/// session order), which must be `kept` of them, diagnosed.
+fn run_keeping(
+    effect: &str,
+    seed: u64,
+    kept: usize,
+    mut keep: impl FnMut(&TrialEntry) -> bool,
+) -> (Generated, Diagnosis) {
     let tmp = tempfile::tempdir().unwrap();
     let g = generate_design(effect, seed, &Design::SHARED, &tmp.path().join("out")).unwrap();
     let mut s = Session::read(&g.dir).unwrap();
-    let keep: Vec<bool> = s
-        .manifest
-        .trials
-        .iter()
-        .map(|t| t.perturbation.is_none())
-        .collect();
-    let mut k = keep.iter();
+    let mask: Vec<bool> = s.manifest.trials.iter().map(&mut keep).collect();
+    let mut k = mask.iter();
     s.manifest.trials.retain(|_| *k.next().unwrap());
-    let mut k = keep.iter();
+    let mut k = mask.iter();
     s.trials.retain(|_| *k.next().unwrap());
-    assert_eq!(s.trials.len(), 8, "the shared layout's unperturbed reaches");
+    assert_eq!(s.trials.len(), kept, "trials kept");
     let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
     (g, d)
 }
@@ -301,32 +307,17 @@ fn run_without_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
 /// late), so that three of the four pairs of opposite directions have two repetitions
 /// on one side and three on the other.
 fn run_without_three_pulses(effect: &str, seed: u64) -> (Generated, Diagnosis) {
-    let tmp = tempfile::tempdir().unwrap();
-    let g = generate_design(effect, seed, &Design::SHARED, &tmp.path().join("out")).unwrap();
-    let mut s = Session::read(&g.dir).unwrap();
     let mut left_out = Vec::new();
-    let keep: Vec<bool> = s
-        .manifest
-        .trials
-        .iter()
-        .map(|t| {
-            let Some(angle) = t.perturbation.as_ref().map(|p| p.angle_deg.round() as i64) else {
-                return true;
-            };
-            if [30, 60, 120].contains(&angle) && !left_out.contains(&angle) {
-                left_out.push(angle);
-                return false;
-            }
-            true
-        })
-        .collect();
-    assert_eq!(left_out.len(), 3);
-    let mut k = keep.iter();
-    s.manifest.trials.retain(|_| *k.next().unwrap());
-    let mut k = keep.iter();
-    s.trials.retain(|_| *k.next().unwrap());
-    let d = diagnose(&s, &DiagnoseOptions::default()).unwrap().diagnosis;
-    (g, d)
+    run_keeping(effect, seed, 29, |t| {
+        let Some(angle) = t.perturbation.as_ref().map(|p| p.angle_deg.round() as i64) else {
+            return true;
+        };
+        if [30, 60, 120].contains(&angle) && !left_out.contains(&angle) {
+            left_out.push(angle);
+            return false;
+        }
+        true
+    })
 }
 
 /// Uneven repetitions: with three pulses set aside the hand balance's units are the
