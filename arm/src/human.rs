@@ -35,7 +35,7 @@ use crate::kinematics::{Elbow, inverse, jacobian, joint_rates};
 use crate::muscles::{MUSCLES, MuscleModel};
 use crate::noise::MotorNoise;
 use crate::params::ArmParams;
-use crate::plan::MinJerk;
+use crate::plan::{MinJerk, ReachPlan};
 use crate::time::{TICK_HZ, ms_to_periods, ticks_to_s};
 
 /// The rig's admittance as felt at the handle (diagonal in the rig frame).
@@ -83,6 +83,11 @@ pub struct ReachTask {
     pub duration_ticks: u64,
     /// The admittance the hand pushes along the plan.
     pub admittance: Admittance,
+    /// Reaches out and back in one trial (a centre-out task that logs the return):
+    /// ticks the hand stays at the goal before it goes back to the start along the
+    /// same line in the same duration; `None`, the default, stays at the goal.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub back_after_ticks: Option<u64>,
 }
 
 /// A motion the rig imposes on the hand, known to the subject:
@@ -217,7 +222,7 @@ pub struct Human {
     task: Task,
     config: HumanConfig,
     /// The reach plan (None when holding).
-    plan: Option<MinJerk>,
+    plan: Option<ReachPlan>,
     shoulder: Vector2<f64>,
     scale: f64,
     fb_lag: usize,
@@ -301,7 +306,18 @@ impl Human {
             Task::Reach(r) => {
                 let a = Vector2::new(r.start_rig_m[0], r.start_rig_m[1]);
                 let b = Vector2::new(r.goal_rig_m[0], r.goal_rig_m[1]);
-                let plan = MinJerk::new(a, b, r.start_tick, r.duration_ticks)?;
+                let plan = ReachPlan {
+                    out: MinJerk::new(a, b, r.start_tick, r.duration_ticks)?,
+                    back: match r.back_after_ticks {
+                        Some(dwell) => Some(MinJerk::new(
+                            b,
+                            a,
+                            r.start_tick + r.duration_ticks + dwell,
+                            r.duration_ticks,
+                        )?),
+                        None => None,
+                    },
+                };
                 check_path(&params, a - shoulder, b - shoulder)?;
                 let adm = &r.admittance;
                 if !adm

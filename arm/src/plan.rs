@@ -88,3 +88,24 @@ impl MinJerk {
         }
     }
 }
+
+/// A reach's plan: the way out, and the way back when the trial returns to its start
+/// (a centre-out task that logs the return). The way back begins where it is due;
+/// before that the plan is the way out's (at rest at its goal after it ends).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ReachPlan {
+    /// From the start to the goal.
+    pub out: MinJerk,
+    /// From the goal back to the start, beginning after the way out ends.
+    pub back: Option<MinJerk>,
+}
+
+impl ReachPlan {
+    /// The plan at a tick.
+    pub fn at(&self, tick: u64) -> HandRef {
+        match &self.back {
+            Some(b) if tick >= b.start_tick => b.at(tick),
+            _ => self.out.at(tick),
+        }
+    }
+}

@@ -29,6 +29,7 @@ fn borner_reach() -> Task {
         start_tick: 400,
         duration_ticks: 12_000,
         admittance: Admittance::BORNER,
+        back_after_ticks: None,
     })
 }
 
@@ -128,6 +129,47 @@ fn default_reach_tracks_its_plan_and_lands_on_borner_table_1() {
     assert!((d[(0, 0)] - 10.98).abs() < 4.85, "D = {d}");
     assert!((d[(0, 1)] + 7.94).abs() < 3.26, "D = {d}");
     assert_relative_eq!(d[(1, 1)], k[(1, 1)] / 12.0, max_relative = 1e-12);
+}
+
+/// Out and back in one trial: the hand follows the way back as it follows the way out
+/// (deviation below the one-way reach's 3 mm bound throughout) and ends within the same
+/// 2 mm of the start 0.5 s after the way back ends.
+#[test]
+fn a_reach_out_and_back_returns_to_its_start() {
+    let params = ArmParams::default();
+    let task = match borner_reach() {
+        Task::Reach(r) => Task::Reach(ReachTask {
+            back_after_ticks: Some(2_000),
+            ..r
+        }),
+        Task::Hold(_) => unreachable!(),
+    };
+    let mut h = Human::new(params.clone(), task, HumanConfig::default(), rng(7)).unwrap();
+    let load = Load {
+        mass_kg: [5.0, 5.0],
+        damping_n_s_per_m: [15.0, 15.0],
+    };
+    let mut s = h.initial_state();
+    let (mut max_dev_m, mut farthest_y): (f64, f64) = (0.0, 0.0);
+    // 400 still, 12 000 out, 2 000 at the goal, 12 000 back, 2 000 still.
+    for tick in 0..28_400u64 {
+        let tau = h.update(tick, &s);
+        s = loaded_rk4(&params, &s, tau, &load, Vector2::zeros(), DT);
+        let x = forward(&params, s.q);
+        let plan = forward(&params, h.base_reference(tick + 1).unwrap().q);
+        max_dev_m = max_dev_m.max((x - plan).norm());
+        farthest_y = farthest_y.max(x.y);
+    }
+    let end_err_m = (forward(&params, s.q) - Vector2::new(0.0, 0.30)).norm();
+    eprintln!(
+        "out and back: max deviation {:.2} mm, farthest {:.4} m, end error {:.2} mm",
+        max_dev_m * 1e3,
+        farthest_y,
+        end_err_m * 1e3
+    );
+    assert!(max_dev_m < 3e-3, "max deviation {max_dev_m} m");
+    assert!((farthest_y - 0.55).abs() < 3e-3, "farthest {farthest_y} m");
+    assert!(end_err_m < 2e-3, "end error {end_err_m} m");
 }
 
 /// Force holding against a rigid handle (hand held at the posture): after the 60 ms

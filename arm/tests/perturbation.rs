@@ -55,6 +55,7 @@ fn run(angle_deg: Option<f64>, seed: u64) -> (Vec<Vector2<f64>>, Option<usize>) 
         start_tick: 400,
         duration_ticks: 12_000,
         admittance: Admittance::BORNER,
+        back_after_ticks: None,
     });
     let mut h = Human::new(
         p.clone(),

@@ -3,7 +3,7 @@
 
 use approx::assert_abs_diff_eq;
 use nalgebra::Vector2;
-use rigtwin_arm::plan::MinJerk;
+use rigtwin_arm::plan::{MinJerk, ReachPlan};
 use rigtwin_arm::time::TICK_HZ;
 
 fn borner() -> MinJerk {
@@ -64,4 +64,43 @@ fn derivatives_match_central_differences() {
 #[test]
 fn zero_duration_is_an_error() {
     assert!(MinJerk::new(Vector2::zeros(), Vector2::new(0.0, 0.1), 0, 0).is_err());
+}
+
+/// Out and back: the way back is the way out mirrored in time about the dwell's
+/// middle (position equal, velocity negated, acceleration equal, to 1e-15), at rest
+/// at the goal through the dwell, and at rest at the start after it.
+#[test]
+fn the_way_back_mirrors_the_way_out() {
+    let out = borner();
+    let (dwell, dur) = (2_000u64, 12_000u64);
+    let back_start = 400 + dur + dwell;
+    let plan = ReachPlan {
+        out,
+        back: Some(
+            MinJerk::new(
+                Vector2::new(0.0, 0.55),
+                Vector2::new(0.0, 0.30),
+                back_start,
+                dur,
+            )
+            .unwrap(),
+        ),
+    };
+    // The mirror: tick 400 + u on the way out is tick back_start + dur − u on the way back.
+    for u in (0..=dur).step_by(373) {
+        let (a, b) = (plan.at(400 + u), plan.at(back_start + dur - u));
+        assert!((a.pos_m - b.pos_m).norm() < 1e-15, "{u}: {a:?} {b:?}");
+        assert!((a.vel_m_s + b.vel_m_s).norm() < 1e-15, "{u}: {a:?} {b:?}");
+        assert!((a.acc_m_s2 - b.acc_m_s2).norm() < 1e-12, "{u}: {a:?} {b:?}");
+    }
+    for tick in [400 + dur, back_start - 1, back_start] {
+        let h = plan.at(tick);
+        assert!((h.pos_m - Vector2::new(0.0, 0.55)).norm() < 1e-15, "{h:?}");
+        assert!(h.vel_m_s.norm() < 1e-15, "{h:?}");
+    }
+    let end = plan.at(back_start + dur + 1);
+    assert!((end.pos_m - Vector2::new(0.0, 0.30)).norm() < 1e-15);
+    // Without a way back it is the way out's plan.
+    let one_way = ReachPlan { out, back: None };
+    assert_eq!(one_way.at(back_start + dur), out.at(back_start + dur));
 }

@@ -13,6 +13,7 @@
 //! cargo run --release -p rigtwin-tests --example generate -- handle-mass 7 /tmp/c --cardinal
 //! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/p --angles 0,180
 //! cargo run --release -p rigtwin-tests --example generate -- grip-compliance 7 /tmp/o --centre-out
+//! cargo run --release -p rigtwin-tests --example generate -- none 7 /tmp/b --centre-out --out-and-back 0.25
 //! rigtwin diagnose /tmp/gen/<session>
 //! ```
 //!
@@ -33,8 +34,9 @@
 //! instead of the protocol's eight, as many per direction as make the shared layout's
 //! 24 pulses unless `--repetitions` says (`Design::with_angles`); `--cardinal` is
 //! `--angles 0,90,180,270` (`Design::cardinal`); `--centre-out` sends the reaches to
-//! three goals (`Design::centre_out`, `CENTRE_OUT_M`). Prints the session folder and what it
-//! hides.
+//! three goals (`Design::centre_out`, `CENTRE_OUT_M`); `--out-and-back SECONDS` brings
+//! each reach back to its start after that long at the goal, in one trial
+//! (`Design::back_after_s`). Prints the session folder and what it hides.
 
 use rigtwin_tests::generator::{
     CARDINAL_DEG, CENTRE_OUT_M, Design, EFFECTS, Hidden, generate_design, generate_hidden,
@@ -44,7 +46,7 @@ use rigtwin_tests::generator::{
 fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let usage = || {
         format!(
-            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--angles DEGREES,…] [--cardinal] [--centre-out]; effects {EFFECTS:?}"
+            "usage: generate <effect> <seed> <out> [trials] [--no-motor-noise] [--repetitions N] [--pulse SECONDS,NEWTONS] [--ideal] [--arm-inertia-scale F] [--movement SECONDS] [--grip N_PER_M,N_S_PER_M] [--lateral] [--angles DEGREES,…] [--cardinal] [--centre-out] [--out-and-back SECONDS]; effects {EFFECTS:?}"
         )
     };
     let mut positional = Vec::new();
@@ -58,6 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let mut angles: Option<Vec<f64>> = None;
     let mut arm_inertia_scale = 1.0;
     let mut movement_s = None;
+    let mut back_after_s = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         match a.as_str() {
@@ -107,6 +110,21 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                     );
                 }
                 arm_inertia_scale = f;
+            }
+            "--out-and-back" => {
+                let v = args.next().ok_or_else(|| {
+                    format!("--out-and-back needs seconds at the goal; {}", usage())
+                })?;
+                let s: f64 = v
+                    .parse()
+                    .map_err(|e| format!("--out-and-back {v:?}: {e}"))?;
+                if !(s.is_finite() && s >= 0.0) {
+                    return Err(format!(
+                        "--out-and-back must be a non-negative time at the goal in s, got {v}"
+                    )
+                    .into());
+                }
+                back_after_s = Some(s);
             }
             "--movement" => {
                 let v = args
@@ -162,6 +180,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     design.arm_inertia_scale = arm_inertia_scale;
     design.movement_s = movement_s;
     design.lateral = lateral;
+    design.back_after_s = back_after_s;
     if centre_out {
         design.targets_m = Some(CENTRE_OUT_M.to_vec());
     }

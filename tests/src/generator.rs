@@ -398,6 +398,10 @@ pub struct Design {
     /// Centre-out goals (the protocol's `reach.targets_m`), rig frame, m; `None`: every
     /// reach to the protocol's goal. [`Design::centre_out`] is a fan of three.
     pub targets_m: Option<Vec<[f64; 2]>>,
+    /// Reaches out and back in one trial (the protocol's `reach.back_after_s`): the time
+    /// at the goal, s, before the hand goes back to its start in the reach's duration,
+    /// as a centre-out task that logs the return; `None`, one way.
+    pub back_after_s: Option<f64>,
 }
 
 impl Design {
@@ -415,6 +419,7 @@ impl Design {
         lateral: false,
         angles_deg: None,
         targets_m: None,
+        back_after_s: None,
     };
 
     /// The shared layout on the ideal rig and without the arm's motor noise: what is
@@ -442,6 +447,7 @@ impl Design {
             lateral: false,
             angles_deg: None,
             targets_m: None,
+            back_after_s: None,
         }
     }
 
@@ -624,6 +630,7 @@ pub fn generate_hidden(
     if let Some(t) = &design.targets_m {
         reach.targets_m.clone_from(t);
     }
+    reach.back_after_s = design.back_after_s;
     let perturbed = reach.repetitions as usize * reach.angles_deg.len();
     reach.trials = u32::try_from(trials.max(perturbed + 2)).unwrap_or(u32::MAX);
     protocol.reach = Some(reach);

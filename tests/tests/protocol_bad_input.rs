@@ -111,6 +111,30 @@ fn durations_must_be_whole_ticks() {
     assert!(e.names("reach.still_before_s"), "{e}");
 }
 
+/// The time at the goal of a reach out and back is a duration like the others: not
+/// negative, whole ticks; a good one lengthens the trial by it and the way back.
+#[test]
+fn the_time_at_the_goal_before_the_way_back_is_checked() {
+    let with = |v: &str| {
+        reach().replace(
+            "movement_s = 3.0",
+            &format!("movement_s = 3.0\nback_after_s = {v}"),
+        )
+    };
+    for bad in ["-0.25", "0.00001"] {
+        let e = parse(&with(bad)).unwrap_err();
+        assert!(e.names("reach.back_after_s"), "{bad}: {e}");
+    }
+    let p = parse(&with("0.25")).unwrap();
+    // 0.25 still + 3 out + 0.25 at the goal + 3 back + 0.25 still.
+    assert!(
+        (p.reach().trial_s() - 6.75).abs() < 1e-12,
+        "{}",
+        p.reach().trial_s()
+    );
+    assert!((p.trial_s().0 - 6.75).abs() < 1e-12);
+}
+
 #[test]
 fn a_section_of_another_kind_is_refused() {
     let text = format!("{}\n[hold]\nforce_n = 10.0\n", reach());

@@ -202,6 +202,13 @@ pub struct ReachConfig {
     /// axis it travels along more ([`ReachConfig::toward`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub targets_m: Vec<[f64; 2]>,
+    /// Reaches out and back in one trial (a centre-out task that logs the return): the
+    /// time the hand stays at the goal, s, before it goes back to `start_m` along the
+    /// same line in `movement_s`; the trial grows by this and `movement_s`. The pulse
+    /// fires on the way out only (the trigger watches the crossing in the direction of
+    /// the way out). Absent, the default: the trial ends at the goal.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub back_after_s: Option<f64>,
 }
 
 impl Default for ReachConfig {
@@ -218,6 +225,7 @@ impl Default for ReachConfig {
             trigger_axis: rigtwin_device::config::Axis::Y,
             trigger_position_m: -0.025,
             targets_m: Vec::new(),
+            back_after_s: None,
         }
     }
 }
@@ -232,7 +240,8 @@ impl ReachConfig {
     /// Trial length, s.
     #[must_use]
     pub fn trial_s(&self) -> f64 {
-        self.still_before_s + self.movement_s + self.still_after_s
+        let back_s = self.back_after_s.map_or(0.0, |b| b + self.movement_s);
+        self.still_before_s + self.movement_s + back_s + self.still_after_s
     }
 
     /// The fraction of the way from `start_m` to `goal_m` at which the pulse fires,
@@ -597,9 +606,13 @@ impl Protocol {
         match self.kind {
             ProtocolKind::ReachPerturb => {
                 let r = self.reach();
+                let (back_s, back_move_s) =
+                    r.back_after_s.map_or((0.0, 0.0), |b| (b, r.movement_s));
                 let parts = [
                     (r.still_before_s, "reach.still_before_s"),
                     (r.movement_s, "reach.movement_s"),
+                    (back_s, "reach.back_after_s"),
+                    (back_move_s, "reach.movement_s"),
                     (r.still_after_s, "reach.still_after_s"),
                 ];
                 sum_and_largest(&parts)
@@ -795,6 +808,10 @@ impl Protocol {
         }
         c.positive("reach.movement_s", r.movement_s);
         c.whole_ticks("reach.movement_s", r.movement_s, CONTROL_RATE);
+        if let Some(b) = r.back_after_s {
+            c.non_negative("reach.back_after_s", b);
+            c.whole_ticks("reach.back_after_s", b, CONTROL_RATE);
+        }
         if r.trials == 0 {
             c.fail("reach.trials", "must be > 0, got 0");
         }

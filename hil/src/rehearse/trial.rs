@@ -318,6 +318,7 @@ fn trial_task(
                 goal_rig_m: r.goal_m,
                 start_tick: ticks(r.still_before_s),
                 duration_ticks: ticks(r.movement_s),
+                back_after_ticks: r.back_after_s.map(ticks),
                 admittance: Admittance {
                     mass_kg: adm.mass_kg,
                     damping_n_s_per_m: adm.damping_n_s_per_m,
