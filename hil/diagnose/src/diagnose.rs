@@ -2276,8 +2276,7 @@ fn rank_hand(
                 .collect();
             d.hand_test_units = h.replicates.as_ref().map(ReplicateTest::units);
             d.hand_repetition_groups = h.repetition_groups;
-            let reaches = crate::hand_signals::reach_groups(session).1.len();
-            d.hand_reaches = (reaches > 1).then_some(reaches);
+            d.hand_reaches = (h.reaches > 1).then_some(h.reaches);
             let w = &h.whitening;
             d.hand_weighting_source = Some(w.source.as_str().to_string());
             d.hand_weighting = [

@@ -1295,6 +1295,9 @@ pub struct HandJudgement {
     /// With fewer than four pairs of opposite directions, the groups each pair's
     /// repetitions are split into (`odd_groups`); `None` otherwise.
     pub repetition_groups: Option<usize>,
+    /// How many reaches the session's trials make (`reach_groups`; 1 when every
+    /// reach goes one way).
+    pub reaches: usize,
     /// Folds over [`Self::responses`].
     pub folds: Folds,
     /// Feedback delay chosen for the baseline, s.
@@ -1389,15 +1392,18 @@ pub fn judge_hand(
         ));
     }
     let arm = HandArm::from_session(session)?;
-    let (responses, replicates, groups) = match hand_responses(session, &arm)? {
-        HandData::Responses(r) => match (
+    let (responses, replicates, groups, reaches) = match hand_responses(session, &arm)? {
+        HandData::Responses {
+            responses: r,
+            reaches,
+        } => match (
             odd_parts(&r, OddUnits::Averaged),
             odd_parts(&r, OddUnits::Replicates),
         ) {
-            (Some(avg), Some(rep)) => (avg, Some(rep), None),
+            (Some(avg), Some(rep)) => (avg, Some(rep), None, reaches),
             _ => match odd_groups(&r) {
-                Some((groups, rep, n)) => (groups, Some(rep), Some(n)),
-                None => (average_by_angle(r), None, None),
+                Some((groups, rep, n)) => (groups, Some(rep), Some(n), reaches),
+                None => (average_by_angle(r), None, None, reaches),
             },
         },
         HandData::Missing(why) => return Ok(Err(why)),
@@ -1500,6 +1506,7 @@ pub fn judge_hand(
         responses,
         replicates,
         repetition_groups: groups,
+        reaches,
         folds,
         fb_delay_s,
         whitening,

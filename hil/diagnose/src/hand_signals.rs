@@ -670,16 +670,20 @@ pub fn reach_axis(session: &Session) -> usize {
 /// direction by a few degrees (the generator's end points by up to 5 mm over 0.2–0.25 m:
 /// under 3°); centre-out goals lie 30° or more apart.
 pub const SAME_REACH_DEG: f64 = 15.0;
-/// Shortest way from a trial's first to its last sample for it to be a reach, m:
-/// shorter ones (a trial held in place) go to no reach.
+/// Shortest way from a trial's first sample to the farthest it goes for it to be a
+/// reach, m: shorter ones (a trial held in place) go to no reach.
 pub const MIN_REACH_M: f64 = 0.02;
 
 /// Which reach each of the session's trials made, in the order of [`Session::iter`]:
-/// the direction of its way from its first recorded position to its last, grouped
-/// with the first reach whose mean direction is within [`SAME_REACH_DEG`] of it
-/// (`None` for a trial that moves less than [`MIN_REACH_M`]). A centre-out session
-/// gives one reach per goal, and reaches out and back give two. Returns the reach
-/// of each trial and the unit vector of each reach's mean direction.
+/// the direction of its way from its first recorded position to the recorded position
+/// farthest from it, grouped with the first reach whose mean direction is within
+/// [`SAME_REACH_DEG`] of it (`None` for a trial whose farthest point is nearer than
+/// [`MIN_REACH_M`]). A one-way reach's farthest point is its end (an overshoot lies on
+/// the same line); a trial that goes out and comes back in one recording (a
+/// centre-out task that logs the return) is put in the reach of its way out. A
+/// centre-out session gives one reach per goal, and reaches out and back logged as
+/// separate trials give two. Returns the reach of each trial and the unit vector of
+/// each reach's mean direction.
 #[must_use]
 pub fn reach_groups(session: &Session) -> (Vec<Option<usize>>, Vec<[f64; 2]>) {
     let cos_same = SAME_REACH_DEG.to_radians().cos();
@@ -691,10 +695,14 @@ pub fn reach_groups(session: &Session) -> (Vec<Option<usize>>, Vec<[f64; 2]>) {
     let of_trial: Vec<Option<usize>> = session
         .iter()
         .map(|(_, t)| {
-            let way = match (t.x_m.first(), t.x_m.last(), t.y_m.first(), t.y_m.last()) {
-                (Some(x0), Some(x1), Some(y0), Some(y1)) => [x1 - x0, y1 - y0],
-                _ => return None,
-            };
+            let (x0, y0) = (*t.x_m.first()?, *t.y_m.first()?);
+            let way = t
+                .x_m
+                .iter()
+                .zip(&t.y_m)
+                .map(|(x, y)| [x - x0, y - y0])
+                .filter(|w| w[0].is_finite() && w[1].is_finite())
+                .max_by(|a, b| a[0].hypot(a[1]).total_cmp(&b[0].hypot(b[1])))?;
             let length = way[0].hypot(way[1]);
             if !(length.is_finite() && length >= MIN_REACH_M) {
                 return None;
@@ -780,8 +788,14 @@ fn at_pace(
 /// Why a session's human side cannot be judged, or the responses.
 #[derive(Debug)]
 pub enum HandData {
-    /// The responses of the perturbed trials.
-    Responses(Vec<HandResponse>),
+    /// The responses of the perturbed trials, and how many reaches the session's
+    /// trials make ([`reach_groups`]: 1 when every reach goes one way).
+    Responses {
+        /// One per perturbed trial with a whole response window.
+        responses: Vec<HandResponse>,
+        /// The reaches found over every trial, perturbed or not.
+        reaches: usize,
+    },
     /// Why not.
     Missing(String),
 }
@@ -989,7 +1003,10 @@ pub fn hand_responses(session: &Session, arm: &HandArm) -> Result<HandData, Disc
             HAND_LEAD_S
         )));
     }
-    Ok(HandData::Responses(responses))
+    Ok(HandData::Responses {
+        responses,
+        reaches: directions.len(),
+    })
 }
 
 /// Value of a local vector at `j − lag` samples (fractional lag, linear interpolation).
