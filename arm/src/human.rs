@@ -312,7 +312,9 @@ impl Human {
                         Some(dwell) => Some(MinJerk::new(
                             b,
                             a,
-                            r.start_tick + r.duration_ticks + dwell,
+                            r.start_tick
+                                .saturating_add(r.duration_ticks)
+                                .saturating_add(dwell),
                             r.duration_ticks,
                         )?),
                         None => None,
