@@ -35,7 +35,7 @@ use crate::kinematics::{Elbow, inverse, jacobian, joint_rates};
 use crate::muscles::{MUSCLES, MuscleModel};
 use crate::noise::MotorNoise;
 use crate::params::ArmParams;
-use crate::plan::{MinJerk, ReachPlan};
+use crate::plan::ReachPlan;
 use crate::time::{TICK_HZ, ms_to_periods, ticks_to_s};
 
 /// The rig's admittance as felt at the handle (diagonal in the rig frame).
@@ -306,20 +306,8 @@ impl Human {
             Task::Reach(r) => {
                 let a = Vector2::new(r.start_rig_m[0], r.start_rig_m[1]);
                 let b = Vector2::new(r.goal_rig_m[0], r.goal_rig_m[1]);
-                let plan = ReachPlan {
-                    out: MinJerk::new(a, b, r.start_tick, r.duration_ticks)?,
-                    back: match r.back_after_ticks {
-                        Some(dwell) => Some(MinJerk::new(
-                            b,
-                            a,
-                            r.start_tick
-                                .saturating_add(r.duration_ticks)
-                                .saturating_add(dwell),
-                            r.duration_ticks,
-                        )?),
-                        None => None,
-                    },
-                };
+                let plan =
+                    ReachPlan::new(a, b, r.start_tick, r.duration_ticks, r.back_after_ticks)?;
                 check_path(&params, a - shoulder, b - shoulder)?;
                 let adm = &r.admittance;
                 if !adm

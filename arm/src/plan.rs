@@ -101,6 +101,29 @@ pub struct ReachPlan {
 }
 
 impl ReachPlan {
+    /// The reach from `start_m` to `goal_m` beginning at `start_tick` and lasting
+    /// `duration_ticks`, and with `back_after_ticks` the way back: from the goal to the
+    /// start in the same duration, beginning that many ticks after the way out ends
+    /// (the way out mirrored in time). Errors as [`MinJerk::new`].
+    pub fn new(
+        start_m: Vector2<f64>,
+        goal_m: Vector2<f64>,
+        start_tick: u64,
+        duration_ticks: u64,
+        back_after_ticks: Option<u64>,
+    ) -> Result<ReachPlan, ArmError> {
+        let out = MinJerk::new(start_m, goal_m, start_tick, duration_ticks)?;
+        let back = back_after_ticks
+            .map(|dwell| {
+                let back_tick = start_tick
+                    .saturating_add(duration_ticks)
+                    .saturating_add(dwell);
+                MinJerk::new(goal_m, start_m, back_tick, duration_ticks)
+            })
+            .transpose()?;
+        Ok(ReachPlan { out, back })
+    }
+
     /// The plan at a tick.
     pub fn at(&self, tick: u64) -> HandRef {
         match &self.back {

@@ -74,18 +74,15 @@ fn the_way_back_mirrors_the_way_out() {
     let out = borner();
     let (dwell, dur) = (2_000u64, 12_000u64);
     let back_start = 400 + dur + dwell;
-    let plan = ReachPlan {
-        out,
-        back: Some(
-            MinJerk::new(
-                Vector2::new(0.0, 0.55),
-                Vector2::new(0.0, 0.30),
-                back_start,
-                dur,
-            )
-            .unwrap(),
-        ),
-    };
+    let plan = ReachPlan::new(
+        Vector2::new(0.0, 0.30),
+        Vector2::new(0.0, 0.55),
+        400,
+        dur,
+        Some(dwell),
+    )
+    .unwrap();
+    assert_eq!(plan.out, out);
     // The mirror: tick 400 + u on the way out is tick back_start + dur − u on the way back.
     for u in (0..=dur).step_by(373) {
         let (a, b) = (plan.at(400 + u), plan.at(back_start + dur - u));

@@ -120,8 +120,7 @@ pub(crate) fn replay_trial(
         r.movement_s = whole_ticks(timing.duration_s.max(1.0 / TICK_HZ as f64));
         // A reach out and back spends its time at the goal and its way back before the
         // still phase after it.
-        let back_s = r.back_after_s.map_or(0.0, |b| b + r.movement_s);
-        r.still_after_s = (total - r.still_before_s - r.movement_s - back_s).max(0.0);
+        r.still_after_s = (total - r.still_before_s - r.movement_s - r.back_s()).max(0.0);
     }
     let plan = TrialPlan {
         index: u32::try_from(index).unwrap_or(u32::MAX),

@@ -240,8 +240,14 @@ impl ReachConfig {
     /// Trial length, s.
     #[must_use]
     pub fn trial_s(&self) -> f64 {
-        let back_s = self.back_after_s.map_or(0.0, |b| b + self.movement_s);
-        self.still_before_s + self.movement_s + back_s + self.still_after_s
+        self.still_before_s + self.movement_s + self.back_s() + self.still_after_s
+    }
+
+    /// Time at the goal and on the way back of a reach out and back
+    /// (`back_after_s + movement_s`), s; 0 for a reach one way.
+    #[must_use]
+    pub fn back_s(&self) -> f64 {
+        self.back_after_s.map_or(0.0, |b| b + self.movement_s)
     }
 
     /// The fraction of the way from `start_m` to `goal_m` at which the pulse fires,
