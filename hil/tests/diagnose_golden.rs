@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "3d027b7c0c35982be1d985e1a196360c87e5a1f0b5d17c24996db6ed3d78db53",
+        "4034f0d5fc5dacaf312a6c9515386d2c7f18149be18c64987ad40e49dd2c8e39",
     ),
     (
         "example-friction",
-        "00fb1bb453bdb6b9ab1140317eeaab63dd1280e21799b1cc23a74c4e548f5d41",
+        "53366c1f827bcb2db3c7098f9bc26ba83a43fbe6bda990c4c0c5f89c87e545f1",
     ),
     (
         "example-nuisance",
-        "28f38c552d5f8756f9e17c436904a0b8853583097946e6249d089a66792579ce",
+        "4b0515a49ee04b3f7267cd28d43634597817d92b7298fc1cad041600beca4871",
     ),
     (
         "example-rotation-mass",
-        "79f8fd2b00fe95eff2773461b01731645ba7c35ccde67117c471745b91e838d4",
+        "e8022db8882a82cb09f82382305c82ea9d703e1031ba629de4a98c771d007dc6",
     ),
 ];
 

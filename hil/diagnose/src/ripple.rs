@@ -7,9 +7,14 @@
 //! phase), so the law has both per axis.
 //!
 //! The pitch is searched on a grid uniform in wavenumber `1/p`, with a spacing of
-//! `1/(8 L)` for a travel `L`: a pitch error of one step then turns the fitted sinusoid
-//! by at most π/8 over the travel, so the true pitch never falls between two grid
-//! points that both miss it. For each pitch the amplitudes and phases are linear (a
+//! `1/(16 L)` for a travel `L`: the nearest grid point is then at most half a step off,
+//! which turns the fitted sinusoid by at most π/16 over the travel. That alone would
+//! cost under 1 % of amplitude, but the misfit it leaves is not left alone: a position
+//! loop that rejects the cogging puts the ripple into the command, so the force gain's
+//! column can take up what the sinusoid misses, and the gain–mass ridge of a
+//! closed-loop balance carries it further (with `1/(8 L)`, centre-out reaches had their
+//! pitch found 1.1 % off and both amplitudes 10 % low beside a force gain of +10 %).
+//! For each pitch the amplitudes and phases are linear (a
 //! `sin`, `cos` column per axis, each zero on the other axis's rows). An axis whose cart
 //! barely moves over the session (the x axis of a sagittal reach moves only under the
 //! pulses) has its sinusoid nearly constant on each trial, which the per-trial sensor
@@ -50,7 +55,7 @@ impl ForceRipple {
         let travel = travel_m.max(4.0 * MIN_PITCH_M);
         let k0 = 1.0 / MAX_PITCH_M.min(0.5 * travel);
         let k1 = 1.0 / MIN_PITCH_M;
-        let dk = 1.0 / (8.0 * travel);
+        let dk = 1.0 / (16.0 * travel);
         let n = ((k1 - k0) / dk).floor().max(0.0) as usize + 1;
         ForceRipple {
             k0_per_m: k0,
@@ -232,6 +237,51 @@ mod tests {
             });
             [hand, cmd, force]
         })
+    }
+
+    /// The grid's worst case: the true pitch half a step from the nearest point. The
+    /// carts' position loop rejects the cogging, so the command carries it and the force
+    /// gain's column takes up part of what a sinusoid at the wrong pitch misses (here the
+    /// y gain moves by 1.3 %). Half a step of this grid must still give each amplitude
+    /// within 4 %: measured 0.0–1.7 % (x) and 0.0–2.7 % (y) low over both sides. Half a
+    /// step of a grid twice as coarse (the `1/(8 L)` this grid replaced) is a whole step
+    /// here, and costs the y amplitude 5.0 %, beyond the bound: the test tells the two.
+    #[test]
+    fn half_a_grid_step_off_costs_little_amplitude() {
+        let (entry, trial) = cogged_trial();
+        let sig = BalanceSignals::from_trial(&entry, &trial, 1000.0)
+            .unwrap()
+            .unwrap();
+        let grid = ForceRipple::for_travel(sig.travel_m(0).max(sig.travel_m(1)));
+        // The worst amplitude error, relative, over both sides of the true pitch.
+        let worst = |dk: f64| {
+            [-1.0, 1.0]
+                .iter()
+                .flat_map(|sign| {
+                    let off = ForceRipple {
+                        k0_per_m: 1.0 / PITCH_M + sign * dk,
+                        dk_per_m: 1.0,
+                        n: 1,
+                    };
+                    let beta = off.grams(&sig, 0.0).unwrap()[0].solve().unwrap();
+                    [0, 1].map(|axis| {
+                        (amplitude_phase(&beta, axis).0 / AMPLITUDE_N[axis] - 1.0).abs()
+                    })
+                })
+                .fold(0.0, f64::max)
+        };
+        let half = worst(0.5 * grid.dk_per_m);
+        assert!(
+            half < 0.04,
+            "half a step off: amplitude {:.1} % off",
+            half * 100.0
+        );
+        let coarse = worst(grid.dk_per_m);
+        assert!(
+            coarse > 0.04,
+            "half a step of the coarser grid: amplitude only {:.1} % off",
+            coarse * 100.0
+        );
     }
 
     /// Two motors whose tracks start at different positions, with different amplitudes:
