@@ -12,9 +12,11 @@
 //! cost under 1 % of amplitude, but the misfit it leaves is not left alone: a position
 //! loop that rejects the cogging puts the ripple into the command, so the force gain's
 //! column can take up what the sinusoid misses, and the gain–mass ridge of a
-//! closed-loop balance carries it further (with `1/(8 L)`, centre-out reaches had their
-//! pitch found 1.1 % off and both amplitudes 10 % low beside a force gain of +10 %).
-//! For each pitch the amplitudes and phases are linear (a
+//! closed-loop balance carries it further. Half a step of a grid twice as coarse costs
+//! about twice the amplitude on a simulated closed-loop trial, and on one centre-out
+//! session 10 % where this grid's nearest point costs 1 %
+//! (`hil/docs/notes/2026-12-08-ripple-pitch-grid.md`). For each
+//! pitch the amplitudes and phases are linear (a
 //! `sin`, `cos` column per axis, each zero on the other axis's rows). An axis whose cart
 //! barely moves over the session (the x axis of a sagittal reach moves only under the
 //! pulses) has its sinusoid nearly constant on each trial, which the per-trial sensor
@@ -243,9 +245,9 @@ mod tests {
     /// carts' position loop rejects the cogging, so the command carries it and the force
     /// gain's column takes up part of what a sinusoid at the wrong pitch misses (here the
     /// y gain moves by 1.3 %). Half a step of this grid must still give each amplitude
-    /// within 4 %: measured 0.0–1.7 % (x) and 0.0–2.7 % (y) low over both sides. Half a
-    /// step of a grid twice as coarse (the `1/(8 L)` this grid replaced) is a whole step
-    /// here, and costs the y amplitude 5.0 %, beyond the bound: the test tells the two.
+    /// within 4 %: measured from 0.1 % high to 1.7 % low (x) and 0.0–2.7 % low (y) over
+    /// both sides. Half a step of a grid twice as coarse is a whole step here, and costs
+    /// the y amplitude 5.0 %, beyond the bound: the test tells the two.
     #[test]
     fn half_a_grid_step_off_costs_little_amplitude() {
         let (entry, trial) = cogged_trial();
