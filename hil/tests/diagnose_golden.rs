@@ -17,19 +17,19 @@ use rigtwin::session::Sha256;
 const WANT: [(&str, &str); 4] = [
     (
         "example-none",
-        "4034f0d5fc5dacaf312a6c9515386d2c7f18149be18c64987ad40e49dd2c8e39",
+        "5573c5357354f75d68a3a6cbcc77b85687f065c2593bda480e55c5906f695bc3",
     ),
     (
         "example-friction",
-        "53366c1f827bcb2db3c7098f9bc26ba83a43fbe6bda990c4c0c5f89c87e545f1",
+        "05cb106d40b1278192ed00546527254e64dff69bd2a3893f77441e785e7353d7",
     ),
     (
         "example-nuisance",
-        "4b0515a49ee04b3f7267cd28d43634597817d92b7298fc1cad041600beca4871",
+        "43bb1d480efc1a1c9bf1f0001874f56b0a66ead22e14196c4305b8d2b75532de",
     ),
     (
         "example-rotation-mass",
-        "e8022db8882a82cb09f82382305c82ea9d703e1031ba629de4a98c771d007dc6",
+        "129d83a279aebc03adc0bb0f15fc85c84b2e9f94fdfe566b71455b708f852fca",
     ),
 ];
 
