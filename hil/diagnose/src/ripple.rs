@@ -303,6 +303,16 @@ mod tests {
         })
     }
 
+    /// The cogged trial's balance signals and the grid for its travel.
+    fn cogged_signals() -> (BalanceSignals, ForceRipple) {
+        let (entry, trial) = cogged_trial();
+        let sig = BalanceSignals::from_trial(&entry, &trial, 1000.0)
+            .unwrap()
+            .unwrap();
+        let grid = ForceRipple::for_travel(sig.travel_m(0).max(sig.travel_m(1)));
+        (sig, grid)
+    }
+
     /// The grid's worst case: the true pitch half a step from the nearest point. The
     /// carts' position loop rejects the cogging, so the command carries it and the force
     /// gain's column takes up part of what a sinusoid at the wrong pitch misses (here the
@@ -312,11 +322,7 @@ mod tests {
     /// bound: the test tells the two.
     #[test]
     fn half_a_grid_step_off_costs_little_amplitude() {
-        let (entry, trial) = cogged_trial();
-        let sig = BalanceSignals::from_trial(&entry, &trial, 1000.0)
-            .unwrap()
-            .unwrap();
-        let grid = ForceRipple::for_travel(sig.travel_m(0).max(sig.travel_m(1)));
+        let (sig, grid) = cogged_signals();
         // The worst amplitude error, relative, over both sides of the true pitch.
         let worst = |dk: f64| {
             [-1.0, 1.0]
@@ -360,11 +366,7 @@ mod tests {
     /// most one of them.
     #[test]
     fn each_axis_has_its_own_amplitude_and_phase() {
-        let (entry, trial) = cogged_trial();
-        let sig = BalanceSignals::from_trial(&entry, &trial, 1000.0)
-            .unwrap()
-            .unwrap();
-        let ripple = ForceRipple::for_travel(sig.travel_m(0).max(sig.travel_m(1)));
+        let (sig, ripple) = cogged_signals();
         let grams = ripple.grams(&sig, 0.0).unwrap();
         let (best, beta) = grams
             .iter()
