@@ -93,8 +93,7 @@ impl Designed for ForceRipple {
         latency_s: f64,
     ) -> Result<Design, DiscrepancyError> {
         let k = 1.0 / self.pitch_m(s);
-        let speeds = [0, 1].map(|axis| sig.at_rows(&sig.v[axis]).iter().map(|v| v.abs()).collect());
-        let gain = filter_gain(sig, &speeds, k);
+        let (speeds, gain) = speeds_and_gain(sig, k);
         let own = |axis: usize| {
             let q = sig.at_rows(&sig.q[axis]);
             let mut cols = vec![vec![0.0; q.len()]; OWN];
@@ -158,11 +157,14 @@ impl FilterGain {
     }
 }
 
-/// The filter's gain table for a trial's axis speeds at rows and the highest
-/// wavenumber `k_max_per_m`.
-fn filter_gain(sig: &BalanceSignals, speeds: &[Vec<f64>; 2], k_max_per_m: f64) -> FilterGain {
+/// Each axis's speed `|v|` at the evaluated rows, and the filter's gain table up to the
+/// tone of the wavenumber `k_max_per_m` at the fastest of them: what the sinusoids of
+/// every setting up to `k_max_per_m` are scaled by.
+fn speeds_and_gain(sig: &BalanceSignals, k_max_per_m: f64) -> ([Vec<f64>; 2], FilterGain) {
+    let speeds = [0, 1].map(|axis| sig.at_rows(&sig.v[axis]).iter().map(|v| v.abs()).collect());
     let v_max = speeds.iter().flatten().copied().fold(0.0, f64::max);
-    FilterGain::of(sig, k_max_per_m * v_max)
+    let gain = FilterGain::of(sig, k_max_per_m * v_max);
+    (speeds, gain)
 }
 
 impl Candidate for ForceRipple {
@@ -199,10 +201,8 @@ impl Candidate for ForceRipple {
         if !sig.per_trial_offsets() {
             grams.iter_mut().for_each(|g| g.bounds.clear());
         }
-        let speeds: [Vec<f64>; 2] =
-            [0, 1].map(|axis| sig.at_rows(&sig.v[axis]).iter().map(|v| v.abs()).collect());
         let k_max = self.k0_per_m + (self.n.max(1) - 1) as f64 * self.dk_per_m;
-        let gain = filter_gain(sig, &speeds, k_max);
+        let (speeds, gain) = speeds_and_gain(sig, k_max);
         for axis in (0..2).filter(|a| sig.present(*a)) {
             let a = sig.at_rows(&sig.a[axis]);
             let q = sig.at_rows(&sig.q[axis]);
